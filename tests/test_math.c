@@ -1,0 +1,148 @@
+/* test_math.c: math3d, status strings, version. */
+#include <string.h>
+
+#include "minko/math3d.h"
+#include "support/mk_test.h"
+
+START_TEST(status_strings)
+{
+    int i;
+    for (i = 0; i < MK_STATUS_COUNT_; ++i) {
+        ck_assert_ptr_nonnull(mk_status_str((mk_status)i));
+        ck_assert_int_gt((int)strlen(mk_status_str((mk_status)i)), 1);
+        ck_assert_str_ne(mk_status_name((mk_status)i), "MK_STATUS_UNKNOWN");
+    }
+    ck_assert_str_eq(mk_status_str(MK_OK), "ok");
+    ck_assert_str_eq(mk_status_name(MK_ERR_NOT_FINITE), "MK_ERR_NOT_FINITE");
+    ck_assert_str_eq(mk_status_str((mk_status)999), "unknown mk_status value");
+    ck_assert_str_eq(mk_status_name((mk_status)-1), "MK_STATUS_UNKNOWN");
+}
+END_TEST
+
+START_TEST(version_and_precision)
+{
+    ck_assert_int_eq(mk_version(), MK_VERSION_NUMBER);
+#if defined(MK_SINGLE)
+    ck_assert_int_eq(mk_is_double_precision(), 0);
+    ck_assert_int_eq((int)sizeof(mk_real), 4);
+#else
+    ck_assert_int_eq(mk_is_double_precision(), 1);
+    ck_assert_int_eq((int)sizeof(mk_real), 8);
+#endif
+}
+END_TEST
+
+START_TEST(vector_ops)
+{
+    mk_vec3 a = mk_v3(1, 2, 3), b = mk_v3(-4, 5, 0.5);
+    MK_ASSERT_V3_NEAR(mk_v3_cross(a, b), mk_v3(2 * 0.5 - 3 * 5, 3 * -4 - 1 * 0.5, 1 * 5 - 2 * -4), 0);
+    MK_ASSERT_NEAR(mk_v3_dot(a, b), -4 + 10 + 1.5, 0);
+    MK_ASSERT_NEAR(mk_v3_len(mk_v3(3, 4, 12)), 13, 0);
+    MK_ASSERT_V3_NEAR(mk_v3_normalize(mk_v3(0, 0, 0)), mk_v3(0, 0, 0), 0);
+    MK_ASSERT_V3_NEAR(mk_v3_normalize(mk_v3(0, 0, -5)), mk_v3(0, 0, -1), 0);
+    MK_ASSERT_V3_NEAR(mk_v3_mad(a, 2, b), mk_v3(-7, 12, 4), 0);
+    ck_assert(!mk_v3_is_valid(mk_v3(0, (mk_real)NAN, 0)));
+    ck_assert(!mk_v3_is_valid(mk_v3((mk_real)INFINITY, 0, 0)));
+    ck_assert(mk_v3_is_valid(a));
+}
+END_TEST
+
+START_TEST(perp_is_perpendicular_unit)
+{
+    mk_rng r = {1};
+    int i;
+    for (i = 0; i < 1000; ++i) {
+        mk_vec3 n = mk_rng_dir(&r), p = mk_v3_perp(n);
+        MK_ASSERT_NEAR(mk_v3_dot(n, p), 0, 10 * MK_REAL_EPSILON);
+        MK_ASSERT_NEAR(mk_v3_len(p), 1, 10 * MK_REAL_EPSILON);
+    }
+}
+END_TEST
+
+START_TEST(quaternion_matrix_agree)
+{
+    mk_rng r = {7};
+    int i;
+    for (i = 0; i < 1000; ++i) {
+        mk_quat q = mk_rng_quat(&r);
+        mk_vec3 v = mk_rng_v3(&r, -10, 10);
+        mk_mat3 m = mk_mat3_from_quat(q);
+        mk_quat q2 = mk_quat_from_mat3(m);
+        MK_ASSERT_V3_NEAR(mk_quat_rotate(q, v), mk_mat3_mul_v3(m, v), 1000 * MK_REAL_EPSILON);
+        MK_ASSERT_V3_NEAR(mk_quat_inv_rotate(q, mk_quat_rotate(q, v)), v, 1000 * MK_REAL_EPSILON);
+        MK_ASSERT_V3_NEAR(mk_quat_rotate(q2, v), mk_quat_rotate(q, v), 2000 * MK_REAL_EPSILON);
+        MK_ASSERT_V3_NEAR(mk_mat3_tmul_v3(m, mk_mat3_mul_v3(m, v)), v, 1000 * MK_REAL_EPSILON);
+        ck_assert(mk_quat_is_valid(q));
+    }
+}
+END_TEST
+
+START_TEST(axis_angle)
+{
+    mk_quat q = mk_quat_from_axis_angle(mk_v3(0, 0, 2), (mk_real)(3.14159265358979323846 / 2));
+    MK_ASSERT_V3_NEAR(mk_quat_rotate(q, mk_v3(1, 0, 0)), mk_v3(0, 1, 0), 10 * MK_REAL_EPSILON);
+    q = mk_quat_from_axis_angle(mk_v3(0, 0, 0), 1);
+    MK_ASSERT_NEAR(q.w, 1, 0);
+}
+END_TEST
+
+START_TEST(quaternion_validation)
+{
+    ck_assert(!mk_quat_is_valid(mk_quat_make(0, 0, 0, 2)));
+    ck_assert(!mk_quat_is_valid(mk_quat_make(0, 0, 0, 0)));
+    ck_assert(!mk_quat_is_valid(mk_quat_make(0, 0, (mk_real)NAN, 1)));
+    ck_assert(mk_quat_is_valid(mk_quat_make(0, 0, 0, 1 + MK_QUAT_TOLERANCE / 4)));
+    MK_ASSERT_NEAR(mk_quat_normalize(mk_quat_make(0, 0, 0, 0)).w, 1, 0);
+}
+END_TEST
+
+START_TEST(transforms_compose)
+{
+    mk_rng r = {11};
+    int i;
+    for (i = 0; i < 500; ++i) {
+        mk_transform a = mk_transform_make(mk_rng_v3(&r, -100, 100), mk_rng_quat(&r));
+        mk_transform b = mk_transform_make(mk_rng_v3(&r, -100, 100), mk_rng_quat(&r));
+        mk_vec3 v = mk_rng_v3(&r, -10, 10);
+        mk_transform ab = mk_transform_mul(a, b), rel = mk_transform_inv_mul(a, b);
+        MK_ASSERT_V3_NEAR(mk_transform_point(ab, v), mk_transform_point(a, mk_transform_point(b, v)), 1e4 * MK_REAL_EPSILON);
+        /* a * (a^-1 b) = b */
+        MK_ASSERT_V3_NEAR(mk_transform_point(a, mk_transform_point(rel, v)), mk_transform_point(b, v), 1e4 * MK_REAL_EPSILON);
+        MK_ASSERT_V3_NEAR(mk_transform_inv_point(a, mk_transform_point(a, v)), v, 1e4 * MK_REAL_EPSILON);
+    }
+}
+END_TEST
+
+START_TEST(aabb_closed_intervals)
+{
+    mk_aabb a = mk_aabb_make(mk_v3(0, 0, 0), mk_v3(1, 1, 1));
+    mk_aabb touch = mk_aabb_make(mk_v3(1, 0, 0), mk_v3(2, 1, 1));
+    mk_aabb apart = mk_aabb_make(mk_v3(1 + 1e-3, 0, 0), mk_v3(2, 1, 1));
+    ck_assert(mk_aabb_overlap(a, touch));
+    ck_assert(mk_aabb_overlap(touch, a));
+    ck_assert(!mk_aabb_overlap(a, apart));
+    ck_assert(mk_aabb_contains(mk_aabb_union(a, touch), a));
+    ck_assert(!mk_aabb_is_valid(mk_aabb_make(mk_v3(1, 0, 0), mk_v3(0, 1, 1))));
+    ck_assert(!mk_aabb_is_valid(mk_aabb_make(mk_v3((mk_real)NAN, 0, 0), mk_v3(0, 1, 1))));
+    ck_assert(mk_aabb_is_valid(mk_aabb_make(mk_v3(-(mk_real)INFINITY, 0, 0), mk_v3(0, 1, 1))));
+}
+END_TEST
+
+static Suite *math_suite(void)
+{
+    Suite *s = suite_create("math");
+    TCase *tc = tcase_create("core");
+    tcase_add_test(tc, status_strings);
+    tcase_add_test(tc, version_and_precision);
+    tcase_add_test(tc, vector_ops);
+    tcase_add_test(tc, perp_is_perpendicular_unit);
+    tcase_add_test(tc, quaternion_matrix_agree);
+    tcase_add_test(tc, axis_angle);
+    tcase_add_test(tc, quaternion_validation);
+    tcase_add_test(tc, transforms_compose);
+    tcase_add_test(tc, aabb_closed_intervals);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+int main(void) { return mk_test_run(math_suite()); }
