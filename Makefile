@@ -154,9 +154,9 @@ $(B)/.headers-ok: $(wildcard include/minko/*.h) $(CONFIG_H)
 	@touch $@
 
 .PHONY: tests test-run
-tests: lib $(TEST_BINS) $(B)/readme/example $(B)/.headers-ok
+tests: lib $(TEST_BINS) $(B)/readme/example $(B)/.headers-ok $(CHECK_BINS)
 test-run: tests
-	@fail=0; for t in $(TEST_BINS); do \
+	@fail=0; for t in $(TEST_BINS) $(CHECK_BINS); do \
 	  echo "== $$t"; \
 	  CK_FORK=no $$t || fail=1; \
 	done; \
@@ -174,7 +174,31 @@ check: deps
 	@echo "make check: all passed"
 
 # ---- demos, benchmarks, adapters: each area brings its own fragment ----------
+# A fragment registers itself by appending, e.g.
+#   DEMO_BINS  += $(B)/demos/bench_broadphase
+#   BENCH_RUNS += $(B)/demos/bench_broadphase --json $(BENCH_DIR)/broad.jsonl
+#   DEMO_RUNS  += $(B)/demos/bench_broadphase --quick
+#   CHECK_BINS += $(B)/tests/adapter_runner      (extra test programs, run by test-run)
+# The run lists are expanded only when the recipe runs, after every fragment
+# has been read, and run one after another: benchmarks never share the CPU
+# with each other.
+BENCH_DIR := $(B)/bench
+DEMO_BINS :=
+BENCH_RUNS :=
+DEMO_RUNS :=
+CHECK_BINS :=
 -include $(sort $(wildcard demos/*.mk adapters/*/*.mk))
+
+.PHONY: demo-build bench demo
+demo-build: lib $(DEMO_BINS)
+bench: deps
+	$(MAKE) -j$(JOBS) demo-build
+	@mkdir -p $(BENCH_DIR)
+	@set -e; $(foreach c,$(BENCH_RUNS),echo '>> $(c)'; $(c);) echo "bench: JSON Lines in $(BENCH_DIR)/"
+demo: deps
+	$(MAKE) -j$(JOBS) demo-build
+	@mkdir -p $(BENCH_DIR)
+	@set -e; $(foreach c,$(DEMO_RUNS),echo '>> $(c)'; $(c);) true
 
 # ---- install -----------------------------------------------------------------
 PREFIX ?= /usr/local

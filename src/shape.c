@@ -23,6 +23,7 @@ mk_status mk_shape_validate(const mk_shape *s)
 {
     mk_status st;
     if (!s) return MK_ERR_NULL;
+    if ((unsigned)s->type >= MK_SHAPE_TYPE_COUNT) return MK_ERR_BAD_SHAPE;
     if (s->type != MK_SHAPE_PLANE && (st = check_rounding(s->radius)) != MK_OK) return st;
     switch (s->type) {
     case MK_SHAPE_SPHERE: return check_size(s->radius);

@@ -1,10 +1,13 @@
 /* test_shape.c: shape constructors, validation, support functions, AABBs. */
+#include <string.h>
+
 #include "minko/shape.h"
 #include "support/mk_test.h"
 
 START_TEST(constructors_reject_bad_sizes)
 {
     mk_shape s;
+    memset(&s, 0, sizeof s);
     s.type = MK_SHAPE_TYPE_COUNT; /* must stay untouched by refused calls */
     MK_ASSERT_STATUS(mk_shape_sphere(0, &s), MK_ERR_BAD_SIZE);
     MK_ASSERT_STATUS(mk_shape_sphere(-1, &s), MK_ERR_BAD_SIZE);
