@@ -64,13 +64,23 @@ struct mk_hgrid {
 
 /* ---- levels and ranges ---- */
 
+/* Exponent arithmetic on the bits of a double: these run for every moved
+ * proxy every update, where frexp/ilogb/ldexp/floor calls into libm cost
+ * more than the rest of the bookkeeping. */
+static int exponent_of(double x) /* ilogb for normal x > 0 */
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return (int)((u >> 52) & 0x7ff) - 1023;
+}
+
 static int level_of_size(double size)
 {
-    int e;
-    double m;
-    if (!(size > 0)) return MK_LEVEL_MIN_;
-    m = frexp(size, &e);       /* size = m 2^e, m in [0.5, 1) */
-    return m == 0.5 ? e - 1 : e; /* smallest L with 2^L >= size */
+    uint64_t u;
+    if (!(size >= 0x1p-100)) return MK_LEVEL_MIN_;
+    memcpy(&u, &size, sizeof u);
+    /* smallest L with 2^L >= size: the exponent, plus one unless size is a power of two */
+    return exponent_of(size) + ((u & 0xfffffffffffffull) != 0);
 }
 
 static int is_oversized(const mk_aabb *b)
@@ -82,32 +92,67 @@ static int is_oversized(const mk_aabb *b)
     return 0;
 }
 
-static int level_of(const mk_aabb *b)
+/* The two lower bounds on a proxy's level: its size (cells at least as big
+ * as the box) and its distance from the origin (cell indices below 2^41). */
+static void level_bounds(const mk_aabb *b, int *by_size, int *by_coord)
 {
     const mk_real *lo = &b->lo.x, *hi = &b->hi.x;
     double size = 0, far = 0;
-    int k, l, lc;
+    int k;
     for (k = 0; k < 3; ++k) {
-        double s = (double)hi[k] - (double)lo[k];
+        double s = (double)hi[k] - (double)lo[k], a = fabs((double)lo[k]), c = fabs((double)hi[k]);
         if (s > size) size = s;
-        if (fabs((double)lo[k]) > far) far = fabs((double)lo[k]);
-        if (fabs((double)hi[k]) > far) far = fabs((double)hi[k]);
+        if (a > far) far = a;
+        if (c > far) far = c;
     }
-    l = level_of_size(size);
-    lc = far > 0 ? ilogb(far) - 40 : MK_LEVEL_MIN_; /* keeps |coordinate / cell| < 2^41 */
-    if (lc > l) l = lc;
-    if (l < MK_LEVEL_MIN_) l = MK_LEVEL_MIN_;
-    return l;
+    /* A box one ulp over a power of two still counts as that power: unit
+     * cubes should share one level, not split between two by rounding. */
+    *by_size = level_of_size(size * (1 - 0x1p-30));
+    *by_coord = far >= 0x1p-60 ? exponent_of(far) - 40 : MK_LEVEL_MIN_;
 }
 
-static int64_t cell_coord(mk_real v, int level) { return (int64_t)floor(ldexp((double)v, -level)); }
+static int level_of(const mk_aabb *b)
+{
+    int l, lc;
+    level_bounds(b, &l, &lc);
+    return lc > l ? lc : l;
+}
+
+/* A filed proxy keeps its level while its size stays within a factor of two
+ * of the ideal: rounding makes a unit cube measure 1 - ulp or 1 + ulp from
+ * frame to frame, and every level change re-files all its cells. Any level
+ * is correct (cell ranges come from the boxes); the choice only sets cost. */
+static int keeps_level(const mk_aabb *b, int own)
+{
+    int l, lc;
+    level_bounds(b, &l, &lc);
+    return lc <= own && l >= own - 1 && l <= own + 1;
+}
+
+/* 2^-level, exact: the scaling in cell_coord is then an exact product. */
+static double inv_cell(int level)
+{
+    uint64_t u = (uint64_t)(1023 - level) << 52;
+    double d;
+    memcpy(&d, &u, sizeof d);
+    return d;
+}
+
+/* floor(v * inv) for |v * inv| < 2^41 (guaranteed by level_of). */
+static int64_t cell_coord(mk_real v, double inv)
+{
+    double x = (double)v * inv;
+    int64_t i = (int64_t)x;
+    return i - (x < (double)i);
+}
 
 static void range_at(const mk_aabb *b, int level, mk_range *r)
 {
+    double inv = inv_cell(level);
     int k;
     for (k = 0; k < 3; ++k) {
-        r->lo[k] = cell_coord((&b->lo.x)[k], level);
-        r->hi[k] = cell_coord((&b->hi.x)[k], level);
+        r->lo[k] = cell_coord((&b->lo.x)[k], inv);
+        r->hi[k] = cell_coord((&b->hi.x)[k], inv);
     }
 }
 
@@ -285,18 +330,25 @@ static void candidate(mk_bp *bp, struct mk_hgrid *g, uint32_t a, uint32_t b)
     }
 }
 
-/* Files `who` into every cell of r at `level`; meets the proxies there:
- * all of them on its own level, only natives on coarser levels (guests
- * there are finer than their natives and meet `slot` on their own level). */
-static void file_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, int guest)
+static int in_range(const mk_range *r, const int64_t *c)
+{
+    return r && c[0] >= r->lo[0] && c[0] <= r->hi[0] && c[1] >= r->lo[1] && c[1] <= r->hi[1] && c[2] >= r->lo[2] && c[2] <= r->hi[2];
+}
+
+/* Files `slot` into every cell of r at `level` outside `skip` (the cells it
+ * is already in), and meets the proxies there: all of them on its own level,
+ * only natives on coarser levels (guests there are finer than their natives
+ * and meet `slot` on their own level). */
+static void file_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, const mk_range *skip, int guest)
 {
     int64_t c[3];
     for (c[0] = r->lo[0]; c[0] <= r->hi[0]; ++c[0])
         for (c[1] = r->lo[1]; c[1] <= r->hi[1]; ++c[1])
             for (c[2] = r->lo[2]; c[2] <= r->hi[2]; ++c[2]) {
-                mk_cell *cell = cell_get(bp, g, level, c);
+                mk_cell *cell;
                 uint32_t e;
-                if (!cell) return;
+                if (in_range(skip, c)) continue;
+                if (!(cell = cell_get(bp, g, level, c))) return;
                 for (e = cell->head; e != MK_NONE_; e = g->ent[e].next) {
                     uint32_t who = g->ent[e].who;
                     if (!guest || !(who & MK_GUEST_)) candidate(bp, g, slot, who & ~MK_GUEST_);
@@ -306,12 +358,23 @@ static void file_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, 
             }
 }
 
-static void unfile_range(struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, int guest)
+/* Takes `slot` out of every cell of r at `level` outside `keep`. */
+static void unfile_range(struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, const mk_range *keep, int guest)
 {
     int64_t c[3];
     for (c[0] = r->lo[0]; c[0] <= r->hi[0]; ++c[0])
         for (c[1] = r->lo[1]; c[1] <= r->hi[1]; ++c[1])
-            for (c[2] = r->lo[2]; c[2] <= r->hi[2]; ++c[2]) cell_remove(g, level, c, slot | (guest ? MK_GUEST_ : 0));
+            for (c[2] = r->lo[2]; c[2] <= r->hi[2]; ++c[2])
+                if (!in_range(keep, c)) cell_remove(g, level, c, slot | (guest ? MK_GUEST_ : 0));
+}
+
+/* Moves slot's filing on one level from range o to range n, touching only
+ * the cells that differ. */
+static void refile_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, const mk_range *o, const mk_range *n, int guest)
+{
+    unfile_range(g, slot, level, o, n, guest);
+    file_range(bp, g, slot, level, n, o, guest);
+    g->refiled[slot] = 1;
 }
 
 static void ov_add(struct mk_hgrid *g, uint32_t slot)
@@ -334,12 +397,12 @@ static void unfile(struct mk_hgrid *g, uint32_t slot, const mk_aabb *b)
     if (g->reg[slot] == REG_OVERSIZED) ov_remove(g, slot);
     if (g->reg[slot] == REG_CELLS) {
         int own = g->level[slot];
-        unfile_range(g, slot, own, &g->range[slot], 0);
+        unfile_range(g, slot, own, &g->range[slot], NULL, 0);
         for (i = 0; i < g->used_count; ++i) {
             mk_range r;
             if (g->used_list[i] <= own) continue;
             range_at(b, g->used_list[i], &r);
-            unfile_range(g, slot, g->used_list[i], &r, 1);
+            unfile_range(g, slot, g->used_list[i], &r, NULL, 1);
         }
         g->natives[own - MK_LEVEL_MIN_]--;
     }
@@ -355,7 +418,7 @@ static void open_level(mk_bp *bp, struct mk_hgrid *g, int level)
         mk_range r;
         if (g->reg[s] != REG_CELLS || g->level[s] >= level) continue;
         range_at(&bp->box[s], level, &r);
-        file_range(bp, g, s, level, &r, 1);
+        file_range(bp, g, s, level, &r, NULL, 1);
     }
 }
 
@@ -379,32 +442,34 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
     g->natives[own - MK_LEVEL_MIN_]++;
     g->reg[slot] = REG_CELLS;
     range_at(b, own, &g->range[slot]);
-    file_range(bp, g, slot, own, &g->range[slot], 0);
+    file_range(bp, g, slot, own, &g->range[slot], NULL, 0);
     for (i = 0; i < g->used_count; ++i) {
         mk_range r;
         if (g->used_list[i] <= own) continue;
         range_at(b, g->used_list[i], &r);
-        file_range(bp, g, slot, g->used_list[i], &r, 1);
+        file_range(bp, g, slot, g->used_list[i], &r, NULL, 1);
     }
     for (i = 0; i < g->ov_count; ++i) candidate(bp, g, slot, g->oversized[i]);
 }
 
-/* Would slot be filed differently with box nb than it is with box ob? */
-static int filing_changes(const struct mk_hgrid *g, uint32_t slot, const mk_aabb *ob, const mk_aabb *nb)
+/* A moved proxy that keeps its level is re-filed in place, cell by cell;
+ * returns 0 when it must be unfiled and filed again (new level, oversized). */
+static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const mk_aabb *ob, const mk_aabb *nb)
 {
-    int own, i;
+    int own = g->level[slot], i;
     mk_range r, o;
-    if (g->reg[slot] == REG_OVERSIZED || is_oversized(nb)) return 1;
-    own = level_of(nb);
-    if (own != g->level[slot]) return 1;
+    if (g->reg[slot] != REG_CELLS || is_oversized(nb) || !keeps_level(nb, own)) return 0;
     range_at(nb, own, &r);
-    if (!range_eq(&r, &g->range[slot])) return 1;
+    if (!range_eq(&r, &g->range[slot])) {
+        refile_range(bp, g, slot, own, &g->range[slot], &r, 0);
+        g->range[slot] = r;
+    }
     for (i = g->used_count - 1; i >= 0 && g->used_list[i] > own; --i) {
         range_at(nb, g->used_list[i], &r);
         range_at(ob, g->used_list[i], &o);
-        if (!range_eq(&r, &o)) return 1;
+        if (!range_eq(&r, &o)) refile_range(bp, g, slot, g->used_list[i], &o, &r, 1);
     }
-    return 0;
+    return 1;
 }
 
 /* ---- the per-update re-test of candidates ---- */
@@ -568,7 +633,7 @@ mk_status mk_hgrid_update_(mk_bp *bp)
             uint8_t f = bp->flags[s];
             if (f & MK_PF_DYING) { unfile(g, s, &bp->box[s]); continue; }
             if (f & MK_PF_NEW) { g->todo[g->todo_count++] = s; continue; }
-            if ((f & MK_PF_MOVED) && filing_changes(g, s, &bp->box[s], &bp->next[s])) {
+            if ((f & MK_PF_MOVED) && !refile_in_place(bp, g, s, &bp->box[s], &bp->next[s])) {
                 unfile(g, s, &bp->box[s]);
                 g->todo[g->todo_count++] = s;
             }
@@ -578,7 +643,7 @@ mk_status mk_hgrid_update_(mk_bp *bp)
     }
     if (g->fail == MK_OK) retest(bp, g, all);
     if (all) memset(g->refiled, 0, (size_t)bp->hi_slot);
-    else for (i = 0; i < g->todo_count; ++i) g->refiled[g->todo[i]] = 0;
+    else for (i = 0; i < bp->dirty_count; ++i) g->refiled[bp->dirty[i]] = 0;
     if (g->fail != MK_OK) return g->fail;
     bp->rebuild = 0;
     return MK_OK;
@@ -602,8 +667,8 @@ static double cells_covered(const struct mk_hgrid *g, const mk_aabb *q)
     for (i = 0; i < g->used_count; ++i) {
         double n = 1;
         for (k = 0; k < 3; ++k) {
-            double lo = floor(ldexp((double)(&q->lo.x)[k], -g->used_list[i]));
-            double hi = floor(ldexp((double)(&q->hi.x)[k], -g->used_list[i]));
+            double lo = floor((double)(&q->lo.x)[k] * inv_cell(g->used_list[i]));
+            double hi = floor((double)(&q->hi.x)[k] * inv_cell(g->used_list[i]));
             if (!(hi - lo < 4e18) || !(fabs(lo) < 4e18) || !(fabs(hi) < 4e18)) return -1;
             n *= hi - lo + 1;
         }
