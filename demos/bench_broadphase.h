@@ -23,6 +23,8 @@ long bb_minko_frame(bb_minko *m, const double *box, const int *moved, int n_move
                     uint64_t *out, long cap);
 size_t bb_minko_bytes(const bb_minko *m);
 const char *bb_minko_kind(const bb_minko *m);
+/* Pairs the structure holds (the grid: candidates sharing a cell). */
+long bb_minko_candidates(const bb_minko *m);
 void bb_minko_destroy(bb_minko *m);
 
 /* The floor: read every box once and write the true pairs once; returns a

@@ -75,6 +75,12 @@ const char *bb_minko_kind(const bb_minko *m)
     return mk_bp_get_stats(m->bp, &st) == MK_OK ? mk_bp_kind_name(st.kind) : "?";
 }
 
+long bb_minko_candidates(const bb_minko *m)
+{
+    mk_bp_stats st;
+    return mk_bp_get_stats(m->bp, &st) == MK_OK ? st.candidates : -1;
+}
+
 void bb_minko_destroy(bb_minko *m)
 {
     if (!m) return;

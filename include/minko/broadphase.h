@@ -98,6 +98,7 @@ typedef struct mk_bp_stats {
     int switches;           /* AUTO: changes of structure so far */
     int levels;             /* grid: occupied levels */
     int cells;              /* grid: occupied cells */
+    int candidates;         /* grid: candidate pairs held (pairs sharing a cell); others: pairs held */
     size_t bytes;           /* memory held, all blocks */
 } mk_bp_stats;
 
