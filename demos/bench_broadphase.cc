@@ -8,7 +8,7 @@
 // (missing_pairs / extra_pairs). Also timed: the memory-bound floor, reading
 // every AABB and writing the true pairs once.
 //
-//   bench_broadphase [--quick] [--json FILE] [--reps R] [--only SCENE] [--backend NAME]
+//   bench_broadphase [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME]
 // (--backend runs one backend, for profiling with callgrind; no ratios then)
 //
 // Output: JSON Lines per ../shared/BENCH_FORMAT.md (suite "broad") and a table.
@@ -526,7 +526,7 @@ struct Plan { std::string scene; int n, frames; };
 int main(int argc, char **argv)
 {
     bool quick = false;
-    int reps = 3;
+    int reps = 3, only_n = 0;
     const char *json = nullptr, *only = nullptr, *only_backend = nullptr;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
@@ -534,7 +534,8 @@ int main(int argc, char **argv)
         else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
         else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
         else if (!std::strcmp(argv[i], "--backend") && i + 1 < argc) only_backend = argv[++i];
-        else { std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--reps R] [--only SCENE] [--backend NAME]\n", argv[0]); return 2; }
+        else if (!std::strcmp(argv[i], "--n") && i + 1 < argc) only_n = std::atoi(argv[++i]);
+        else { std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME]\n", argv[0]); return 2; }
     }
     std::vector<Plan> plan;
     if (quick) {
@@ -554,7 +555,7 @@ int main(int argc, char **argv)
     std::printf("broadphase: ms per frame (update + pair set), median over frames of %d repetition(s);\n"
                 "ratio = backend cpu / minko.auto cpu (thread CPU time: the machine is shared, wall time is noisier)\n", reps);
     for (const Plan &p : plan) {
-        if (only && p.scene != only) continue;
+        if ((only && p.scene != only) || (only_n && p.n != only_n)) continue;
         Scene s = make_scene(p.scene, p.n, p.frames, 1234 + (uint64_t)p.n);
         double avg_pairs = 0;
         for (size_t f = 1; f < s.frames.size(); ++f) avg_pairs += (double)s.frames[f].truth.size();

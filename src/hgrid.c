@@ -34,7 +34,15 @@
 #define MK_LEVEL_MAX_ 1100
 #define MK_LEVELS_ (MK_LEVEL_MAX_ - MK_LEVEL_MIN_ + 1)
 
-enum { REG_NONE = 0, REG_CELLS = 1, REG_OVERSIZED = 2 };
+/* Per-proxy state bits: how it is filed, and what this update did to it. */
+enum {
+    REG_NONE = 0, REG_CELLS = 1, REG_OVERSIZED = 2, REG_MASK = 3,
+    ST_REFILED = 4,   /* filing changed in this update: candidacy must be re-checked */
+    ST_DIRTY = 8,     /* moved, created or refiltered in this update */
+    ST_REFILTER = 16, /* filter words changed */
+    ST_GONE = 32,     /* unfiled in this update */
+    ST_SLOW = ST_REFILED | ST_REFILTER | ST_GONE /* its candidates need the full re-test */
+};
 
 typedef struct mk_cell {
     int64_t c[3];
@@ -52,11 +60,11 @@ struct mk_hgrid {
     /* per proxy slot */
     int32_t *level;
     mk_range *range;        /* native cell range */
-    uint8_t *reg;           /* REG_* */
-    uint8_t *refiled;       /* re-filed in this update: candidates must be re-checked */
+    uint8_t *st;            /* REG_* | ST_* */
     uint32_t *ov_pos;       /* index in oversized[] */
     uint32_t *todo; int todo_count; /* proxies to file in this update */
     double *travel;         /* sum over updates of the largest move of any face */
+    double *refile_at;      /* travel at which a face may first reach a cell wall */
     int updates;            /* since travel was last reset to 0 */
     uint32_t *oversized; int ov_count;
     /* levels */
@@ -154,6 +162,23 @@ static int64_t cell_coord(mk_real v, double inv)
     return i - (x < (double)i);
 }
 
+/* range_at for an in-place re-filing: 0 (nothing written that matters) when
+ * a coordinate is infinite, NaN-free but out of the 2^41 index bound, i.e.
+ * when the proxy needs a new level or the oversized list. */
+static int range_fits(const mk_aabb *b, int level, mk_range *r)
+{
+    double inv = inv_cell(level);
+    int k;
+    for (k = 0; k < 3; ++k) {
+        double lo = (double)(&b->lo.x)[k] * inv, hi = (double)(&b->hi.x)[k] * inv;
+        int64_t i;
+        if (!(lo > -0x1p41 && hi < 0x1p41)) return 0;
+        i = (int64_t)lo; r->lo[k] = i - (lo < (double)i);
+        i = (int64_t)hi; r->hi[k] = i - (hi < (double)i);
+    }
+    return 1;
+}
+
 static void range_at(const mk_aabb *b, int level, mk_range *r)
 {
     double inv = inv_cell(level);
@@ -181,6 +206,24 @@ static void coarser(const mk_range *native, int d, mk_range *out)
         out->lo[k] = floor_shift(native->lo[k], d);
         out->hi[k] = floor_shift(native->hi[k], d);
     }
+}
+
+/* How far box b's faces are from the walls of their cells (range r at
+ * level): no face can change cell before moving that far. Shrunk like the
+ * wakes, so rounding can only make the grid look again too early. */
+static double wall_room(const mk_aabb *b, const mk_range *r, int level, double travel)
+{
+    double c = 1 / inv_cell(level), room = HUGE_VAL;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        double lo = (double)(&b->lo.x)[k], hi = (double)(&b->hi.x)[k];
+        double w0 = (double)r->lo[k] * c, w1 = (double)r->hi[k] * c, d;
+        d = lo - w0; if (d < room) room = d;
+        d = w0 + c - lo; if (d < room) room = d;
+        d = hi - w1; if (d < room) room = d;
+        d = w1 + c - hi; if (d < room) room = d;
+    }
+    return travel + room * (1 - 0x1p-20) - travel * 0x1p-36;
 }
 
 static int range_eq(const mk_range *a, const mk_range *b) { return memcmp(a, b, sizeof *a) == 0; }
@@ -401,7 +444,7 @@ static void refile_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level
 {
     unfile_range(g, slot, level, o, n, guest);
     file_range(bp, g, slot, level, n, o, guest);
-    g->refiled[slot] = 1;
+    g->st[slot] |= ST_REFILED;
 }
 
 static void ov_add(struct mk_hgrid *g, uint32_t slot)
@@ -421,8 +464,8 @@ static void ov_remove(struct mk_hgrid *g, uint32_t slot)
 static void unfile(struct mk_hgrid *g, uint32_t slot)
 {
     int i;
-    if (g->reg[slot] == REG_OVERSIZED) ov_remove(g, slot);
-    if (g->reg[slot] == REG_CELLS) {
+    if ((g->st[slot] & REG_MASK) == REG_OVERSIZED) ov_remove(g, slot);
+    if ((g->st[slot] & REG_MASK) == REG_CELLS) {
         int own = g->level[slot];
         unfile_range(g, slot, own, &g->range[slot], NULL, 0);
         for (i = 0; i < g->used_count; ++i) {
@@ -433,7 +476,7 @@ static void unfile(struct mk_hgrid *g, uint32_t slot)
         }
         g->natives[own - MK_LEVEL_MIN_]--;
     }
-    g->reg[slot] = REG_NONE;
+    g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | ST_GONE);
 }
 
 /* A level comes into use: every finer proxy already filed becomes its guest. */
@@ -443,7 +486,7 @@ static void open_level(mk_bp *bp, struct mk_hgrid *g, int level)
     use_level_list(g, level);
     for (s = 0; s < (uint32_t)bp->hi_slot && g->fail == MK_OK; ++s) {
         mk_range r;
-        if (g->reg[s] != REG_CELLS || g->level[s] >= level) continue;
+        if ((g->st[s] & REG_MASK) != REG_CELLS || g->level[s] >= level) continue;
         coarser(&g->range[s], level - g->level[s], &r);
         file_range(bp, g, s, level, &r, NULL, 1);
     }
@@ -454,12 +497,13 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
     const mk_aabb *b = &bp->box[slot];
     int i, own;
     uint32_t s;
-    g->refiled[slot] = 1;
+    g->st[slot] |= ST_REFILED;
     if (is_oversized(b)) {
         /* Everything is its candidate, filed or oversized. */
         for (s = 0; s < (uint32_t)bp->hi_slot; ++s)
-            if (g->reg[s] != REG_NONE) candidate(bp, g, slot, s);
-        g->reg[slot] = REG_OVERSIZED;
+            if (g->st[s] & REG_MASK) candidate(bp, g, slot, s);
+        g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | REG_OVERSIZED);
+        g->refile_at[slot] = 0;
         ov_add(g, slot);
         return;
     }
@@ -467,8 +511,9 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
     if (!g->used[own - MK_LEVEL_MIN_]) open_level(bp, g, own);
     g->level[slot] = own;
     g->natives[own - MK_LEVEL_MIN_]++;
-    g->reg[slot] = REG_CELLS;
+    g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | REG_CELLS);
     range_at(b, own, &g->range[slot]);
+    g->refile_at[slot] = wall_room(b, &g->range[slot], own, g->travel[slot]);
     file_range(bp, g, slot, own, &g->range[slot], NULL, 0);
     for (i = 0; i < g->used_count; ++i) {
         mk_range r;
@@ -485,13 +530,14 @@ static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const m
 {
     int own = g->level[slot], i;
     mk_range r, o, old = g->range[slot];
-    if (g->reg[slot] != REG_CELLS || is_oversized(nb)) return 0;
-    range_at(nb, own, &r);
+    if ((g->st[slot] & REG_MASK) == REG_OVERSIZED && is_oversized(nb)) return 1; /* still everyone's candidate */
+    if ((g->st[slot] & REG_MASK) != REG_CELLS || !range_fits(nb, own, &r)) return 0;
     /* Cell walls of coarser levels are walls of this one too: if no wall of
      * this level was crossed, no coarser filing changed either. The level is
      * only reconsidered then: within the same cells it cannot be far off. */
-    if (range_eq(&r, &g->range[slot])) return 1;
+    if (range_eq(&r, &g->range[slot])) { g->refile_at[slot] = wall_room(nb, &r, own, g->travel[slot]); return 1; }
     if (!keeps_level(nb, own)) return 0;
+    g->refile_at[slot] = wall_room(nb, &r, own, g->travel[slot]);
     refile_range(bp, g, slot, own, &old, &r, 0);
     g->range[slot] = r;
     for (i = g->used_count - 1; i >= 0 && g->used_list[i] > own; --i) {
@@ -509,7 +555,7 @@ static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const m
 static int still_candidates(const struct mk_hgrid *g, uint32_t a, uint32_t b)
 {
     mk_range r;
-    if (g->reg[a] == REG_OVERSIZED || g->reg[b] == REG_OVERSIZED) return 1;
+    if ((g->st[a] | g->st[b]) & REG_OVERSIZED) return 1;
     if (g->level[a] == g->level[b]) return ranges_meet(&g->range[a], &g->range[b]);
     if (g->level[a] < g->level[b]) { coarser(&g->range[a], g->level[b] - g->level[a], &r); return ranges_meet(&r, &g->range[b]); }
     coarser(&g->range[b], g->level[a] - g->level[b], &r);
@@ -547,15 +593,14 @@ static uint32_t next_state(const mk_bp *bp, const struct mk_hgrid *g, uint32_t a
 {
     const uint32_t pair_bits = MK_PS_CAND | MK_PS_LIVE | MK_PS_REJECTED;
     uint32_t s = e->state;
-    double sum = g->travel[a] + g->travel[b];
-    int overlap, refilter;
-    if (g->reg[a] == REG_NONE || g->reg[b] == REG_NONE || !(s & MK_PS_CAND)) return s & ~pair_bits;
-    if ((g->refiled[a] || g->refiled[b]) && !still_candidates(g, a, b)) return s & ~pair_bits;
-    refilter = ((bp->flags[a] | bp->flags[b]) & MK_PF_REFILTER) != 0;
-    if (!refilter && sum < (double)e->wake) return s;
-    if (refilter) s &= ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
+    uint8_t sa = g->st[a], sb = g->st[b];
+    int overlap;
+    if (!(sa & REG_MASK) || !(sb & REG_MASK) || !(s & MK_PS_CAND)) return s & ~pair_bits;
+    if (((sa | sb) & ST_REFILED) && !still_candidates(g, a, b)) return s & ~pair_bits;
+    if ((sa | sb) & ST_REFILTER) s &= ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
+    else if (g->travel[a] + g->travel[b] < (double)e->wake) return s;
     overlap = mk_bp_overlap_(&bp->box[a], &bp->box[b]);
-    e->wake = wake_at(sum, margin(&bp->box[a], &bp->box[b], overlap));
+    e->wake = wake_at(g->travel[a] + g->travel[b], margin(&bp->box[a], &bp->box[b], overlap));
     if (!overlap) return s & ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
     if (s & (MK_PS_LIVE | MK_PS_REJECTED)) return s;
     return s | (mk_bp_filter_pass_(bp, a, b) ? MK_PS_LIVE : MK_PS_REJECTED);
@@ -568,37 +613,42 @@ static void retest(mk_bp *bp, struct mk_hgrid *g, int all)
     for (i = 0; i < t->count; ++i) {
         mk_pair_entry *e = &t->e[i];
         uint32_t a = (uint32_t)(e->key >> 32), b = (uint32_t)e->key, s, old = e->state;
-        if (!all && !((bp->flags[a] | bp->flags[b]) & MK_PF_DIRTY)) continue;
+        uint8_t sa = g->st[a], sb = g->st[b];
+        if (!all && !((sa | sb) & ST_DIRTY)) continue;
+        /* the common case: both filed as before, too little travel to matter
+         * (every entry here has CAND: the grid sets it on insertion) */
+        if (!((sa | sb) & ST_SLOW) && g->travel[a] + g->travel[b] < (double)e->wake) continue;
         s = next_state(bp, g, a, b, e);
         e->state = s;
         if ((s ^ old) & (MK_PS_LIVE | MK_PS_CAND)) mk_pairs_touch_(bp, e);
     }
 }
 
-/* Adds each moved proxy's largest face move to its travel (before commit).
- * Every 256 updates travel restarts from 0, with every wake, so the sums
+/* Every 256 updates travel restarts from 0, with every wake, so the sums
  * stay small enough for the float wakes to keep their precision. */
-static void add_travel(mk_bp *bp, struct mk_hgrid *g)
+static void restart_travel(mk_bp *bp, struct mk_hgrid *g)
 {
-    int i, k;
-    if (++g->updates >= 256) {
-        g->updates = 0;
-        memset(g->travel, 0, sizeof(double) * (size_t)bp->hi_slot);
-        for (i = 0; i < bp->pairs.count; ++i) bp->pairs.e[i].wake = 0;
+    int i;
+    if (++g->updates < 256) return;
+    g->updates = 0;
+    memset(g->travel, 0, sizeof(double) * (size_t)bp->hi_slot);
+    memset(g->refile_at, 0, sizeof(double) * (size_t)bp->hi_slot);
+    for (i = 0; i < bp->pairs.count; ++i) bp->pairs.e[i].wake = 0;
+}
+
+/* The largest move of any face from box o to box n (infinite when a side is). */
+static double face_travel(const mk_aabb *o, const mk_aabb *n)
+{
+    const mk_real *ol = &o->lo.x, *oh = &o->hi.x, *nl = &n->lo.x, *nh = &n->hi.x;
+    double d = 0;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        double dl = fabs((double)nl[k] - (double)ol[k]), dh = fabs((double)nh[k] - (double)oh[k]);
+        if (!(dl <= 1e300 && dh <= 1e300)) return HUGE_VAL; /* inf - inf: test always */
+        if (dl > d) d = dl;
+        if (dh > d) d = dh;
     }
-    for (i = 0; i < bp->dirty_count; ++i) {
-        uint32_t s = bp->dirty[i];
-        const mk_real *ol = &bp->box[s].lo.x, *oh = &bp->box[s].hi.x, *nl = &bp->next[s].lo.x, *nh = &bp->next[s].hi.x;
-        double d = 0;
-        if (!(bp->flags[s] & MK_PF_MOVED)) continue;
-        for (k = 0; k < 3; ++k) {
-            double dl = fabs((double)nl[k] - (double)ol[k]), dh = fabs((double)nh[k] - (double)oh[k]);
-            if (!(dl <= 1e300 && dh <= 1e300)) { d = HUGE_VAL; break; } /* infinite sides: test always */
-            if (dl > d) d = dl;
-            if (dh > d) d = dh;
-        }
-        g->travel[s] += d;
-    }
+    return d;
 }
 
 /* ---- lifetime ---- */
@@ -609,12 +659,12 @@ static int grid_arrays(struct mk_hgrid *g, grid_array_ *a)
     int n = 0;
     a[n].p = (void **)&g->level; a[n++].elem = sizeof *g->level;
     a[n].p = (void **)&g->range; a[n++].elem = sizeof *g->range;
-    a[n].p = (void **)&g->reg; a[n++].elem = sizeof *g->reg;
-    a[n].p = (void **)&g->refiled; a[n++].elem = sizeof *g->refiled;
+    a[n].p = (void **)&g->st; a[n++].elem = sizeof *g->st;
     a[n].p = (void **)&g->ov_pos; a[n++].elem = sizeof *g->ov_pos;
     a[n].p = (void **)&g->todo; a[n++].elem = sizeof *g->todo;
     a[n].p = (void **)&g->oversized; a[n++].elem = sizeof *g->oversized;
     a[n].p = (void **)&g->travel; a[n++].elem = sizeof *g->travel;
+    a[n].p = (void **)&g->refile_at; a[n++].elem = sizeof *g->refile_at;
     return n;
 }
 
@@ -626,7 +676,7 @@ static void reset_cells(struct mk_hgrid *g, int proxies)
     for (i = 0; i < g->ent_cap; ++i) g->ent[i].next = i + 1 < g->ent_cap ? (uint32_t)i + 1 : MK_NONE_;
     g->ent_free = 0;
     g->ent_used = 0;
-    memset(g->reg, 0, (size_t)proxies);
+    memset(g->st, 0, (size_t)proxies);
     memset(g->natives, 0, sizeof g->natives);
     memset(g->used, 0, sizeof g->used);
     g->used_count = 0;
@@ -654,8 +704,8 @@ mk_status mk_hgrid_create_(mk_bp *bp)
     if (!(g->cells = (mk_cell *)mk_bp_alloc_(bp, sizeof(mk_cell) * (size_t)g->cell_cap))) goto fail;
     if (!(g->ent = (mk_centry *)mk_bp_alloc_(bp, sizeof(mk_centry) * (size_t)g->ent_cap))) goto fail;
     if (!(g->index = (uint32_t *)mk_bp_alloc_(bp, sizeof(uint32_t) * (size_t)(g->index_mask + 1)))) goto fail;
-    memset(g->refiled, 0, (size_t)bp->cap);
     memset(g->travel, 0, sizeof(double) * (size_t)bp->cap);
+    memset(g->refile_at, 0, sizeof(double) * (size_t)bp->cap);
     reset_cells(g, bp->cap);
     return MK_OK;
 fail:
@@ -708,6 +758,27 @@ static void rebuild(mk_bp *bp, struct mk_hgrid *g)
         if (in_structure(bp, s)) file(bp, g, s);
 }
 
+/* One pass over the changed proxies, with the old boxes still in place:
+ * mark them, add up their travel, re-file what crossed a cell wall. */
+static void take_changes(mk_bp *bp, struct mk_hgrid *g)
+{
+    int i;
+    for (i = 0; i < bp->dirty_count; ++i) {
+        uint32_t s = bp->dirty[i];
+        uint8_t f = bp->flags[s];
+        g->st[s] |= (uint8_t)(ST_DIRTY | ((f & MK_PF_REFILTER) ? ST_REFILTER : 0));
+        if (f & MK_PF_DYING) { unfile(g, s); continue; }
+        if (f & MK_PF_NEW) { g->todo[g->todo_count++] = s; continue; }
+        if (!(f & MK_PF_MOVED)) continue;
+        g->travel[s] += face_travel(&bp->box[s], &bp->next[s]);
+        if (g->travel[s] < g->refile_at[s]) continue; /* no face can have reached a wall */
+        if (!refile_in_place(bp, g, s, &bp->next[s])) {
+            unfile(g, s);
+            g->todo[g->todo_count++] = s;
+        }
+    }
+}
+
 mk_status mk_hgrid_update_(mk_bp *bp)
 {
     struct mk_hgrid *g;
@@ -720,24 +791,17 @@ mk_status mk_hgrid_update_(mk_bp *bp)
     if (all) {
         rebuild(bp, g);
     } else {
-        /* Unfile what changes, with the old boxes; then commit; then file. */
-        for (i = 0; i < bp->dirty_count; ++i) {
-            uint32_t s = bp->dirty[i];
-            uint8_t f = bp->flags[s];
-            if (f & MK_PF_DYING) { unfile(g, s); continue; }
-            if (f & MK_PF_NEW) { g->todo[g->todo_count++] = s; continue; }
-            if ((f & MK_PF_MOVED) && !refile_in_place(bp, g, s, &bp->next[s])) {
-                unfile(g, s);
-                g->todo[g->todo_count++] = s;
-            }
-        }
-        add_travel(bp, g);
+        restart_travel(bp, g);
+        take_changes(bp, g);
         mk_bp_commit_(bp);
         for (i = 0; i < g->todo_count && g->fail == MK_OK; ++i) file(bp, g, g->todo[i]);
     }
     if (g->fail == MK_OK) retest(bp, g, all);
-    if (all) memset(g->refiled, 0, (size_t)bp->hi_slot);
-    else for (i = 0; i < bp->dirty_count; ++i) g->refiled[bp->dirty[i]] = 0;
+    if (all) {
+        for (i = 0; i < bp->hi_slot; ++i) g->st[i] &= REG_MASK;
+    } else {
+        for (i = 0; i < bp->dirty_count; ++i) g->st[bp->dirty[i]] &= REG_MASK;
+    }
     if (g->fail != MK_OK) return g->fail;
     bp->rebuild = 0;
     return MK_OK;
@@ -749,7 +813,7 @@ static void linear_query(const mk_bp *bp, const struct mk_hgrid *g, mk_aabb q, m
 {
     uint32_t s;
     for (s = 0; s < (uint32_t)bp->hi_slot; ++s)
-        if (g->reg[s] != REG_NONE && mk_bp_overlap_(&bp->box[s], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
+        if ((g->st[s] & REG_MASK) && mk_bp_overlap_(&bp->box[s], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
 }
 
 /* Cells the query covers over all levels, or -1 if that is beyond reason
