@@ -162,15 +162,17 @@ static int64_t cell_coord(mk_real v, double inv)
     return i - (x < (double)i);
 }
 
-/* range_at for an in-place re-filing: 0 (nothing written that matters) when
- * a coordinate is infinite, NaN-free but out of the 2^41 index bound, i.e.
- * when the proxy needs a new level or the oversized list. */
-static int range_fits(const mk_aabb *b, int level, mk_range *r)
+/* The cells of box b grown by `margin` cells on every side. Re-filings of
+ * slow boxes use 1/16 (fat_range), so a box jittering across a cell wall is
+ * not re-filed every frame; any superset of the box's own cells is correct.
+ * Returns 0 when a coordinate is infinite or beyond the 2^41 index bound:
+ * the proxy then needs a new level or the oversized list. */
+static int range_with_margin(const mk_aabb *b, int level, double margin, mk_range *r)
 {
     double inv = inv_cell(level);
     int k;
     for (k = 0; k < 3; ++k) {
-        double lo = (double)(&b->lo.x)[k] * inv, hi = (double)(&b->hi.x)[k] * inv;
+        double lo = (double)(&b->lo.x)[k] * inv - margin, hi = (double)(&b->hi.x)[k] * inv + margin;
         int64_t i;
         if (!(lo > -0x1p41 && hi < 0x1p41)) return 0;
         i = (int64_t)lo; r->lo[k] = i - (lo < (double)i);
@@ -178,6 +180,9 @@ static int range_fits(const mk_aabb *b, int level, mk_range *r)
     }
     return 1;
 }
+
+static int fat_range(const mk_aabb *b, int level, mk_range *r) { return range_with_margin(b, level, 0.0625, r); }
+static int range_fits(const mk_aabb *b, int level, mk_range *r) { return range_with_margin(b, level, 0, r); }
 
 static void range_at(const mk_aabb *b, int level, mk_range *r)
 {
@@ -208,21 +213,27 @@ static void coarser(const mk_range *native, int d, mk_range *out)
     }
 }
 
-/* How far box b's faces are from the walls of their cells (range r at
- * level): no face can change cell before moving that far. Shrunk like the
- * wakes, so rounding can only make the grid look again too early. */
-static double wall_room(const mk_aabb *b, const mk_range *r, int level, double travel)
+/* How far box b's faces may move before leaving r, the cells it is filed in
+ * at level (negative once they have left). */
+static double wall_room(const mk_aabb *b, const mk_range *r, int level)
 {
     double c = 1 / inv_cell(level), room = HUGE_VAL;
     int k;
     for (k = 0; k < 3; ++k) {
-        double lo = (double)(&b->lo.x)[k], hi = (double)(&b->hi.x)[k];
-        double w0 = (double)r->lo[k] * c, w1 = (double)r->hi[k] * c, d;
-        d = lo - w0; if (d < room) room = d;
-        d = w0 + c - lo; if (d < room) room = d;
-        d = hi - w1; if (d < room) room = d;
-        d = w1 + c - hi; if (d < room) room = d;
+        /* inside means wall_lo <= lo and hi < wall_hi: a face on the upper
+         * wall is already in the next cell */
+        double d0 = (double)(&b->lo.x)[k] - (double)r->lo[k] * c, d1 = (double)(r->hi[k] + 1) * c - (double)(&b->hi.x)[k];
+        if (!(d0 >= 0 && d1 > 0)) return -1; /* NaN (infinite sides) too */
+        if (d0 < room) room = d0;
+        if (d1 < room) room = d1;
     }
+    return room;
+}
+
+/* The travel at which a proxy with that much room must be looked at again;
+ * shrunk like the wakes, so rounding can only make it come early. */
+static double room_until(double travel, double room)
+{
     return travel + room * (1 - 0x1p-20) - travel * 0x1p-36;
 }
 
@@ -512,8 +523,8 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
     g->level[slot] = own;
     g->natives[own - MK_LEVEL_MIN_]++;
     g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | REG_CELLS);
-    range_at(b, own, &g->range[slot]);
-    g->refile_at[slot] = wall_room(b, &g->range[slot], own, g->travel[slot]);
+    range_at(b, own, &g->range[slot]); /* first filing: tight; re-filings add the margin */
+    g->refile_at[slot] = room_until(g->travel[slot], wall_room(b, &g->range[slot], own));
     file_range(bp, g, slot, own, &g->range[slot], NULL, 0);
     for (i = 0; i < g->used_count; ++i) {
         mk_range r;
@@ -526,20 +537,26 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
 
 /* A moved proxy that keeps its level is re-filed in place, cell by cell;
  * returns 0 when it must be unfiled and filed again (new level, oversized). */
-static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const mk_aabb *nb)
+static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const mk_aabb *nb, double moved)
 {
     int own = g->level[slot], i;
     mk_range r, o, old = g->range[slot];
+    double room;
     if ((g->st[slot] & REG_MASK) == REG_OVERSIZED && is_oversized(nb)) return 1; /* still everyone's candidate */
-    if ((g->st[slot] & REG_MASK) != REG_CELLS || !range_fits(nb, own, &r)) return 0;
-    /* Cell walls of coarser levels are walls of this one too: if no wall of
-     * this level was crossed, no coarser filing changed either. The level is
-     * only reconsidered then: within the same cells it cannot be far off. */
-    if (range_eq(&r, &g->range[slot])) { g->refile_at[slot] = wall_room(nb, &r, own, g->travel[slot]); return 1; }
+    if ((g->st[slot] & REG_MASK) != REG_CELLS) return 0;
+    room = wall_room(nb, &old, own);
+    if (room >= 0) { g->refile_at[slot] = room_until(g->travel[slot], room); return 1; }
+    /* Left its cells. The level is only reconsidered now: while the box
+     * stays within them its size cannot be far off. */
     if (!keeps_level(nb, own)) return 0;
-    g->refile_at[slot] = wall_room(nb, &r, own, g->travel[slot]);
+    /* The margin pays for slow or jittering boxes; a box moving more than
+     * the margin per update would leave it anyway, and gets its bare cells. */
+    if (moved * inv_cell(own) < 0.0625) { if (!fat_range(nb, own, &r)) return 0; }
+    else if (!range_fits(nb, own, &r)) return 0;
+    g->refile_at[slot] = room_until(g->travel[slot], wall_room(nb, &r, own));
     refile_range(bp, g, slot, own, &old, &r, 0);
     g->range[slot] = r;
+    /* Cell walls of coarser levels are walls of this one too. */
     for (i = g->used_count - 1; i >= 0 && g->used_list[i] > own; --i) {
         mk_range n;
         coarser(&r, g->used_list[i] - own, &n);
@@ -694,11 +711,12 @@ mk_status mk_hgrid_create_(mk_bp *bp)
     n = grid_arrays(g, a);
     for (i = 0; i < n; ++i)
         if (!(*a[i].p = mk_bp_alloc_(bp, a[i].elem * (size_t)bp->cap))) goto fail;
-    /* A proxy covers at most 8 cells of its own level, plus a guest cell or
-     * two per coarser level. Growing pools start at the typical need; fixed
-     * ones get room for 8 cells and 16 filings per proxy. */
-    g->cell_cap = (bp->def.fixed_capacity ? 8 : 2) * bp->cap + 64;
-    g->ent_cap = (bp->def.fixed_capacity ? 16 : 4) * bp->cap + 64;
+    /* A proxy covers 8 cells of its own level at most, 27 once re-filed with
+     * a margin, plus a guest cell or two per coarser level. Growing pools
+     * start at the typical need; fixed ones get room for 27 cells and 32
+     * filings per proxy, which a wide spread of sizes can still exceed. */
+    g->cell_cap = (bp->def.fixed_capacity ? 27 : 2) * bp->cap + 64;
+    g->ent_cap = (bp->def.fixed_capacity ? 32 : 4) * bp->cap + 64;
     g->index_mask = 1;
     while (g->index_mask + 1 < (uint32_t)g->cell_cap * 2) g->index_mask = g->index_mask * 2 + 1;
     if (!(g->cells = (mk_cell *)mk_bp_alloc_(bp, sizeof(mk_cell) * (size_t)g->cell_cap))) goto fail;
@@ -766,13 +784,15 @@ static void take_changes(mk_bp *bp, struct mk_hgrid *g)
     for (i = 0; i < bp->dirty_count; ++i) {
         uint32_t s = bp->dirty[i];
         uint8_t f = bp->flags[s];
+        double moved;
         g->st[s] |= (uint8_t)(ST_DIRTY | ((f & MK_PF_REFILTER) ? ST_REFILTER : 0));
         if (f & MK_PF_DYING) { unfile(g, s); continue; }
         if (f & MK_PF_NEW) { g->todo[g->todo_count++] = s; continue; }
         if (!(f & MK_PF_MOVED)) continue;
-        g->travel[s] += face_travel(&bp->box[s], &bp->next[s]);
+        moved = face_travel(&bp->box[s], &bp->next[s]);
+        g->travel[s] += moved;
         if (g->travel[s] < g->refile_at[s]) continue; /* no face can have reached a wall */
-        if (!refile_in_place(bp, g, s, &bp->next[s])) {
+        if (!refile_in_place(bp, g, s, &bp->next[s], moved)) {
             unfile(g, s);
             g->todo[g->todo_count++] = s;
         }

@@ -63,6 +63,10 @@ extern "C" {
  * Ordering ids orders proxies by slot, so sorted pair sets are deterministic. */
 typedef uint32_t mk_bp_id;
 #define MK_BP_NULL_ID 0u
+/* The slot of an id: below proxy_capacity, unique among live proxies, so
+ * callers can index their own arrays by it (e.g. to map pairs to objects
+ * without a call per pair). */
+#define MK_BP_SLOT(id) ((id) >> 8)
 /* Most proxies one broadphase can hold (slot numbers fit in 24 bits). */
 #define MK_BP_MAX_PROXIES (1 << 24)
 
@@ -122,7 +126,10 @@ MK_API mk_status mk_bp_create(const mk_bp_def *def, const mk_allocator *alloc, m
 MK_API void mk_bp_destroy(mk_bp *bp);
 
 /* A static proxy never pairs with another static proxy and costs nothing per
- * update unless it is moved. The new proxy's pairs appear at the next update. */
+ * update unless it is moved. The new proxy's pairs appear at the next update.
+ * The slots of proxies destroyed since the last update are freed by it:
+ * until then they count against proxy_capacity (size it for the live
+ * proxies plus one frame's worth of destroy-and-create). */
 MK_API mk_status mk_bp_create_proxy(mk_bp *bp, mk_aabb box, void *user, uint64_t cat, uint64_t mask,
                                     int is_static, mk_bp_id *out);
 /* Its pairs disappear at the next update (reported in mk_bp_removed()). */
