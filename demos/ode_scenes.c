@@ -30,6 +30,7 @@
 
 #include <ode/ode.h>
 
+#include "minko_ode.h"
 #include "support/oracle.h"
 
 /* ---- small utilities ---------------------------------------------------- */
@@ -79,7 +80,7 @@ static double median(double *v, int n)
 typedef void space_collide_fn(dSpaceID space, void *data, dNearCallback *cb);
 typedef int collide_fn(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip);
 
-enum space_kind { SPACE_HASH, SPACE_SAP };
+enum space_kind { SPACE_HASH, SPACE_SAP, SPACE_SIMPLE };
 
 typedef struct backend {
     const char *name;        /* the JSON `backend` key */
@@ -88,7 +89,10 @@ typedef struct backend {
     collide_fn *collide;
 } backend;
 
-/* The first backend is the reference of the `same` column. It is the SAP
+/* Minko's broadphase keeps its geoms in a dSimpleSpace, the container with
+ * no upkeep of its own (adapters.md B.2).
+ *
+ * The first backend is the reference of the `same` column. It is the SAP
  * space, not the hash space: ODE 0.16.2's dHashSpace misses overlapping
  * pairs in the level-0 cells at x = y = 0 whose z range crosses 0 (the
  * unsigned `getVirtualAddressBase(level, x, y) + zbegin` wraps when it is
@@ -97,6 +101,7 @@ typedef struct backend {
 static const backend BACKENDS[] = {
     {"ode.sap", SPACE_SAP, dSpaceCollide, dCollide},
     {"ode.hash", SPACE_HASH, dSpaceCollide, dCollide},
+    {"minko.bp", SPACE_SIMPLE, mk_ode_space_collide, dCollide},
 };
 #define NBACKENDS ((int)(sizeof BACKENDS / sizeof BACKENDS[0]))
 
@@ -618,7 +623,9 @@ static void sim_init(sim *s, const backend *be, const scene *sc)
     s->be = be;
     s->sc = sc;
     s->world = dWorldCreate();
-    s->space = be->space == SPACE_SAP ? dSweepAndPruneSpaceCreate(0, dSAP_AXES_XYZ) : dHashSpaceCreate(0);
+    s->space = be->space == SPACE_SAP    ? dSweepAndPruneSpaceCreate(0, dSAP_AXES_XYZ)
+               : be->space == SPACE_HASH ? dHashSpaceCreate(0)
+                                         : dSimpleSpaceCreate(0);
     s->group = dJointGroupCreate(0);
     s->seed = 0;
     dWorldSetQuickStepNumIterations(s->world, sc->iterations);
@@ -631,6 +638,7 @@ static void sim_init(sim *s, const backend *be, const scene *sc)
 static void sim_free(sim *s)
 {
     dJointGroupDestroy(s->group);
+    mk_ode_space_forget(s->space);
     dSpaceDestroy(s->space);
     dWorldDestroy(s->world);
     free(s->bodies);
@@ -976,7 +984,7 @@ int main(int argc, char **argv)
         return 2;
     }
     dInitODE2(0);
-    printf("ode_scenes: ODE %s scenes, native dHashSpace / dSweepAndPruneSpace%s\n",
+    printf("ode_scenes: ODE %s scenes, native spaces and colliders against Minko's%s\n",
            dCheckConfiguration("ODE_double_precision") ? "double" : "single", quick ? " (quick)" : "");
     {
         rng r = {0x5eed0006u};
@@ -987,7 +995,7 @@ int main(int argc, char **argv)
         if (!only || !strcmp(only, cases[i].name)) run_case(&cases[i], json);
     if (!only || !strcmp(only, "hull_depth")) run_hull_depth(quick, json);
     for (i = 0; i < NHULLS; i++) hull_free(&hulls[i]);
-    dCloseODE();
+    mk_ode_close();
     if (json) fclose(json);
     return 0;
 }
