@@ -188,6 +188,8 @@ BENCH_RUNS :=
 DEMO_RUNS :=
 CHECK_BINS :=
 -include $(sort $(wildcard demos/*.mk adapters/*/*.mk))
+# The `tests` rule above was read before the fragments filled CHECK_BINS.
+tests: $(CHECK_BINS)
 
 .PHONY: demo-build bench demo
 demo-build: lib $(DEMO_BINS)

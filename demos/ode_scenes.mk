@@ -1,0 +1,10 @@
+# demos/ode_scenes.mk: ODE scenes side by side, native collision against Minko (issue 7).
+$(B)/demos/ode_scenes: demos/ode_scenes.c $(STATIC_LIB)
+	@mkdir -p $(@D)
+	$(say) CCLD $@
+	$(Q)$(CC) $(APP_CFLAGS) $(ODE_CFLAGS) -MMD -MP $< $(STATIC_LIB) $(LDSAN) $(LDFLAGS) $(ODE_LIBS) -lm -o $@
+
+-include $(B)/demos/ode_scenes.d
+DEMO_BINS += $(B)/demos/ode_scenes
+BENCH_RUNS += $(B)/demos/ode_scenes --json $(BENCH_DIR)/ode.jsonl
+DEMO_RUNS += $(B)/demos/ode_scenes --quick
