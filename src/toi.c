@@ -1,8 +1,11 @@
 /* toi.c: continuous collision: sweeps and swept bounds (minko/toi.h). */
 #include <math.h>
+#include <string.h>
 
+#include "minko/distance.h"
 #include "minko/toi.h"
 #include "shape_internal.h"
+#include "toi_internal.h"
 
 static mk_status check_transform(mk_transform xf)
 {
@@ -140,4 +143,514 @@ mk_status mk_swept_aabb(const mk_shape *s, const mk_sweep *sw, mk_aabb *out)
     a0 = mk_aabb_expand(mk_aabb_union(a0, a1), sag + slack);
     *out = mk_aabb_make(mk_v3_max(a0.lo, ball.lo), mk_v3_min(a0.hi, ball.hi));
     return MK_OK;
+}
+
+/* ---- time of impact ---------------------------------------------------------
+ *
+ * Conservative advancement with second-order bounds. At a time t0 proven free
+ * of contact the distance query gives a separating normal n. The separation
+ * of the shapes along any axis e, s(t) = min over B of e.y - max over A of
+ * e.x, is a lower bound of their distance, so a lower bound L(d) of
+ * s(t0 + d) - target that stays positive on [0, d*) proves the shapes keep
+ * farther apart than target until t0 + d*. Each body moves its centre at a
+ * constant velocity and turns at a constant rate w about it; turning a unit
+ * vector u for a time d moves it off its tangent line by at most
+ * d^2/2 |w| |w x u| (the Taylor remainder of e^{i phi}), so with h the
+ * support function about the centre and rho the bounding radius,
+ *     h(Q(d)^T u) <= h(u + d u x w) + d^2/2 |w| |u x w| rho.
+ * Support functions are convex and the direction is affine in d, so each L
+ * below is concave: its one root is bracketed by Newton steps from the right
+ * and chords from the left, whose sides the sign of L tells apart. Three axes:
+ *  - fixed in the world: tight when both supports along n are single points
+ *    (vertex or smooth contacts);
+ *  - turning with A, or with B: tight when n is a face normal of that shape,
+ *    where a fixed axis would see the face's far edge rise at first order.
+ * Any one root is a proof; the step is the largest, and never shorter than
+ * Mirtich's linear bound (projected relative speed + |n x w| rho). L has the
+ * true slope of the separation at d = 0, so the advancement converges
+ * quadratically where Mirtich's converges linearly, and a translating face
+ * contact is reached in one step. */
+
+#define TOI_MAX_ITERATIONS 64      /* distance queries per TOI */
+#define TOI_MAX_ROOT_ITERATIONS 12 /* pairs of bound evaluations per step */
+
+/* Tolerance floor, relative to the pair's size and travel: the accuracy of
+ * the distance queries (GJK stops at ~1e4 eps relative in double). */
+#if defined(MK_SINGLE)
+#  define TOI_TOL_FLOOR (MK_REAL(1e2) * MK_REAL_EPSILON)
+#else
+#  define TOI_TOL_FLOOR (MK_REAL(1e4) * MK_REAL_EPSILON)
+#endif
+/* A plane's sweep may carry this much rotation from rounding (equal start
+ * and end orientations); it is treated as none. */
+#define TOI_PLANE_STILL (MK_REAL(1e3) * MK_REAL_EPSILON)
+
+typedef struct toi_body {
+    const mk_shape *s;
+    const mk_sweep *sw;
+    mk_vec3 dc;    /* c1 - c0 */
+    mk_vec3 w;     /* rotation over the step */
+    mk_real rho;   /* bounding radius about the rotation centre */
+    mk_mat3 R;     /* orientation at the time being expanded */
+    mk_vec3 c;     /* rotation centre at that time, relative to A's c0 */
+    int hint;      /* support vertex hint */
+} toi_body;
+
+/* L(d) = c0 + c1 d + c2 d^2 + c3 d^3 - sum_i h_i(u_i + d v_i), with c2, c3 <= 0. */
+typedef struct toi_bound {
+    mk_real c0, c1, c2, c3;
+    toi_body *body[2];
+    mk_vec3 u[2], v[2];
+    int terms;
+} toi_bound;
+
+static void body_init(toi_body *b, const mk_shape *s, const mk_sweep *sw, mk_vec3 origin)
+{
+    b->s = s;
+    b->sw = sw;
+    b->dc = mk_v3_sub(sw->c1, sw->c0);
+    b->w = s->type == MK_SHAPE_PLANE ? mk_v3_zero() : sw->rotation;
+    b->rho = s->type == MK_SHAPE_PLANE ? 0 : bounding_radius(s, sw->local_center);
+    b->c = mk_v3_sub(sw->c0, origin);
+    b->R = mk_mat3_from_quat(mk_quat_normalize(sw->q0));
+    b->hint = -1;
+}
+
+static void body_at(toi_body *b, mk_real t, mk_vec3 origin)
+{
+    b->R = mk_mat3_from_quat(sweep_rotation(b->sw, t));
+    b->c = mk_v3_mad(mk_v3_sub(b->sw->c0, origin), t, b->dc);
+}
+
+/* Support point of the solid along world direction m (not unit), as an
+ * offset from the rotation centre. A plane cannot turn and is only ever
+ * asked along its outward normal: the answer is the foot of the centre. */
+static mk_vec3 support_rel(toi_body *b, mk_vec3 m)
+{
+    mk_vec3 p, w;
+    mk_real l;
+    if (b->s->type == MK_SHAPE_PLANE)
+        return mk_v3_scale(mk_mat3_mul_v3(b->R, b->s->u.plane.normal),
+                           b->s->u.plane.offset - mk_v3_dot(b->s->u.plane.normal, b->sw->local_center));
+    p = mk_core_support(b->s, mk_mat3_tmul_v3(b->R, m), &b->hint);
+    w = mk_mat3_mul_v3(b->R, mk_v3_sub(p, b->sw->local_center));
+    if (b->s->radius > 0 && (l = mk_v3_len(m)) > 0) w = mk_v3_mad(w, b->s->radius / l, m);
+    return w;
+}
+
+/* L and a supergradient of it (any support point is a subgradient of h). */
+static mk_real bound_eval(const toi_bound *L, mk_real d, mk_real *slope)
+{
+    mk_real value = L->c0 + d * (L->c1 + d * (L->c2 + d * L->c3));
+    int i;
+    *slope = L->c1 + d * (2 * L->c2 + 3 * d * L->c3);
+    for (i = 0; i < L->terms; ++i) {
+        mk_vec3 m = mk_v3_mad(L->u[i], d, L->v[i]);
+        mk_vec3 w = support_rel(L->body[i], m);
+        value -= mk_v3_dot(m, w);
+        *slope -= mk_v3_dot(L->v[i], w);
+    }
+    return value;
+}
+
+/* Axis n fixed in the world; D = cB - cA at t0, V = dcB - dcA. */
+static toi_bound bound_fixed(toi_body *a, toi_body *b, mk_vec3 n, mk_vec3 D, mk_vec3 V, mk_real target)
+{
+    toi_bound L;
+    mk_vec3 ra = mk_v3_cross(n, a->w), rb = mk_v3_cross(n, b->w);
+    L.c0 = mk_v3_dot(n, D) - target;
+    L.c1 = mk_v3_dot(n, V);
+    L.c2 = -MK_REAL(0.5) * (mk_v3_len(a->w) * mk_v3_len(ra) * a->rho + mk_v3_len(b->w) * mk_v3_len(rb) * b->rho);
+    L.c3 = 0;
+    L.terms = 2;
+    L.body[0] = a;
+    L.u[0] = n;
+    L.v[0] = ra;
+    L.body[1] = b;
+    L.u[1] = mk_v3_neg(n);
+    L.v[1] = mk_v3_neg(rb);
+    return L;
+}
+
+/* Axis e (from T towards O) turning with T: T's term is constant, O's
+ * direction turns with the relative rotation Q_O^T Q_T e = e + d b + R,
+ * |R| <= d^2 (|wO| |wO x e| / 2 + |wO x a| + |wT| |a| / 2), a = wT x e, and
+ * the centre term e(d).(D + d V) loses at most |wT| |a| d^2 / 2 (|D| + d |V|).
+ * D = cO - cT at t0, V = dcO - dcT. */
+static toi_bound bound_turning(toi_body *T, toi_body *O, mk_vec3 e, mk_vec3 D, mk_vec3 V, mk_real target)
+{
+    toi_bound L;
+    mk_vec3 a = mk_v3_cross(T->w, e), b = mk_v3_cross(mk_v3_sub(T->w, O->w), e);
+    mk_real wt = mk_v3_len(T->w), wo = mk_v3_len(O->w), la = mk_v3_len(a);
+    L.c0 = mk_v3_dot(e, D) - mk_v3_dot(e, support_rel(T, e)) - target;
+    L.c1 = mk_v3_dot(a, D) + mk_v3_dot(e, V);
+    L.c2 = mk_min(0, mk_v3_dot(a, V)) - MK_REAL(0.5) * wt * la * mk_v3_len(D) -
+           O->rho * (MK_REAL(0.5) * wo * mk_v3_len(mk_v3_cross(O->w, e)) + mk_v3_len(mk_v3_cross(O->w, a)) + MK_REAL(0.5) * wt * la);
+    L.c3 = -MK_REAL(0.5) * wt * la * mk_v3_len(V);
+    L.terms = 1;
+    L.body[0] = O;
+    L.u[0] = mk_v3_neg(e);
+    L.v[0] = mk_v3_neg(b);
+    return L;
+}
+
+typedef struct toi_query {
+    mk_real distance;
+    mk_vec3 normal, pa, pb; /* world */
+} toi_query;
+
+/* Distance at time t; leaves both bodies' frames at t. A plane's normal is
+ * the exact separating axis, so plane pairs need no narrowphase at all. */
+static mk_status distance_at(toi_body *a, toi_body *b, mk_real t, mk_vec3 origin, mk_gjk_cache *cache, toi_query *q)
+{
+    body_at(a, t, origin);
+    body_at(b, t, origin);
+    if (a->s->type == MK_SHAPE_PLANE || b->s->type == MK_SHAPE_PLANE) {
+        toi_body *plane = a->s->type == MK_SHAPE_PLANE ? a : b;
+        mk_vec3 n = mk_mat3_mul_v3(plane->R, plane->s->u.plane.normal), pa, pb;
+        if (plane == b) n = mk_v3_neg(n);
+        pa = mk_v3_add(a->c, support_rel(a, n));
+        pb = mk_v3_add(b->c, support_rel(b, mk_v3_neg(n)));
+        q->normal = n;
+        q->distance = mk_v3_dot(n, mk_v3_sub(pb, pa));
+        /* The plane's witness is the foot of the other shape's deepest point. */
+        if (plane == a) pa = mk_v3_mad(pb, -q->distance, n);
+        else pb = mk_v3_mad(pa, q->distance, n);
+        q->pa = mk_v3_add(pa, origin);
+        q->pb = mk_v3_add(pb, origin);
+        return MK_OK;
+    } else {
+        mk_distance_result r;
+        mk_status st = mk_distance(a->s, sweep_pose(a->sw, t), b->s, sweep_pose(b->sw, t), cache, &r);
+        q->distance = r.distance;
+        q->normal = r.normal;
+        q->pa = r.point_a;
+        q->pb = r.point_b;
+        return st;
+    }
+}
+
+/* Rate of change of the distance at the witness points: the relative
+ * velocity of the two material points along the normal. */
+static mk_real approach_rate(const toi_body *a, const toi_body *b, const toi_query *q, mk_vec3 origin)
+{
+    mk_vec3 va = mk_v3_add(a->dc, mk_v3_cross(a->w, mk_v3_sub(mk_v3_sub(q->pa, origin), a->c)));
+    mk_vec3 vb = mk_v3_add(b->dc, mk_v3_cross(b->w, mk_v3_sub(mk_v3_sub(q->pb, origin), b->c)));
+    return mk_v3_dot(q->normal, mk_v3_sub(vb, va));
+}
+
+/* A bracket [lo, hi] of the root of L: L(lo) >= 0 > L(hi). */
+typedef struct toi_bracket {
+    mk_real lo, glo, hi, ghi, shi;
+} toi_bracket;
+
+/* L is concave, so the sign of L(trial) says on which side of the root a
+ * trial lies, whichever way it was found. */
+static int bracket_try(toi_bracket *k, const toi_bound *L, mk_real trial)
+{
+    mk_real g, s;
+    if (!(trial > k->lo && trial < k->hi)) return 0;
+    g = bound_eval(L, trial, &s);
+    if (g >= 0) {
+        k->lo = trial;
+        k->glo = g;
+    } else {
+        k->hi = trial;
+        k->ghi = g;
+        k->shi = s;
+    }
+    return 1;
+}
+
+/* Root of L beyond `from` (where L >= 0 is not yet known), or `from` when L
+ * is already negative there; *clear when L stays positive up to dmax. */
+static mk_real bound_root(const toi_bound *L, mk_real from, mk_real dmax, int *clear)
+{
+    toi_bracket k;
+    mk_real s;
+    int i;
+    k.lo = from;
+    k.glo = bound_eval(L, from, &s);
+    if (k.glo < 0) return from;
+    k.hi = dmax;
+    k.ghi = bound_eval(L, dmax, &k.shi);
+    if (k.ghi >= 0) {
+        *clear = 1;
+        return dmax;
+    }
+    for (i = 0; i < TOI_MAX_ROOT_ITERATIONS && k.hi - k.lo > MK_REAL(1e-9) * k.hi; ++i) {
+        if (k.shi < 0) bracket_try(&k, L, k.hi - k.ghi / k.shi);
+        if (!bracket_try(&k, L, k.lo + (k.hi - k.lo) * k.glo / (k.glo - k.ghi))) break;
+    }
+    return k.lo;
+}
+
+/* Largest step from t0 proven free of contact (see the section comment).
+ * Returns dmax and sets *clear when no contact is possible before dmax. */
+static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real target, mk_real dmax, int method, int *clear)
+{
+    mk_vec3 n = q->normal, D = mk_v3_sub(b->c, a->c), V = mk_v3_sub(b->dc, a->dc);
+    toi_bound L = bound_fixed(a, b, n, D, V, target);
+    mk_real g0, slope, rate, step;
+    *clear = 0;
+    g0 = bound_eval(&L, 0, &slope);
+    if (!(g0 > 0)) {
+        /* n does not separate to working precision: Mirtich's bound on the distance itself. */
+        rate = mk_v3_len(V) + mk_v3_len(a->w) * a->rho + mk_v3_len(b->w) * b->rho;
+        step = (q->distance - target) / rate;
+        *clear = step >= dmax;
+        return mk_min(step, dmax);
+    }
+    rate = -L.c1 + mk_v3_len(L.v[0]) * a->rho + mk_v3_len(L.v[1]) * b->rho;
+    step = rate > 0 ? g0 / rate : dmax;
+    if (step >= dmax) {
+        *clear = 1;
+        return dmax;
+    }
+    if (method == MK_TOI_METHOD_MIRTICH) return step;
+    step = bound_root(&L, step, dmax, clear);
+    /* A plane's support is finite only along its normal, which the fixed axis already follows. */
+    if (!*clear && mk_v3_len2(a->w) > 0 && b->s->type != MK_SHAPE_PLANE) {
+        L = bound_turning(a, b, n, D, V, target);
+        step = bound_root(&L, step, dmax, clear);
+    }
+    if (!*clear && mk_v3_len2(b->w) > 0 && a->s->type != MK_SHAPE_PLANE) {
+        L = bound_turning(b, a, mk_v3_neg(n), mk_v3_neg(D), mk_v3_neg(V), target);
+        step = bound_root(&L, step, dmax, clear);
+    }
+    return step;
+}
+
+/* Catto's bilateral advancement on the same fixed axis (measured against the
+ * conservative step; not a proof: the root it brackets need not be the first). */
+static mk_real axis_separation(toi_body *a, toi_body *b, mk_vec3 n, mk_real t, mk_vec3 origin)
+{
+    body_at(a, t, origin);
+    body_at(b, t, origin);
+    return mk_v3_dot(n, mk_v3_sub(mk_v3_add(b->c, support_rel(b, mk_v3_neg(n))), mk_v3_add(a->c, support_rel(a, n))));
+}
+
+static mk_real bilateral(toi_body *a, toi_body *b, const toi_query *q, mk_real t0, mk_real t1, mk_real target, mk_real tol,
+                         mk_vec3 origin, int *clear)
+{
+    mk_real lo = t0, hi = t1, slo = q->distance - target, shi = axis_separation(a, b, q->normal, t1, origin) - target;
+    int i;
+    *clear = shi > tol;
+    if (shi > -tol) return t1 - t0;
+    for (i = 0; i < 50; ++i) {
+        mk_real t = (i & 1) ? lo + (hi - lo) * slo / (slo - shi) : MK_REAL(0.5) * (lo + hi);
+        mk_real s = axis_separation(a, b, q->normal, t, origin) - target;
+        if (mk_fabs_(s) < tol) return t - t0;
+        if (s > 0) {
+            lo = t;
+            slo = s;
+        } else {
+            hi = t;
+            shi = s;
+        }
+    }
+    return lo - t0;
+}
+
+static void toi_finish(mk_toi_result *out, mk_toi_state state, mk_real t, const toi_body *a, const toi_body *b, const toi_query *q,
+                       mk_vec3 origin)
+{
+    out->state = state;
+    out->t = t;
+    out->distance = q->distance;
+    out->normal = q->normal;
+    out->point_a = q->pa;
+    out->point_b = q->pb;
+    out->rate = approach_rate(a, b, q, origin);
+}
+
+mk_status mk_toi_run_(const mk_shape *sa, const mk_sweep *wa, const mk_shape *sb, const mk_sweep *wb, mk_real target, mk_real tolerance,
+                      mk_real t_max, int method, mk_toi_result *out)
+{
+    toi_body a, b;
+    toi_query q;
+    mk_gjk_cache cache;
+    mk_vec3 origin = wa->c0;
+    mk_real t = 0, tol;
+    mk_status st;
+    int iter;
+    memset(&cache, 0, sizeof cache);
+    body_init(&a, sa, wa, origin);
+    body_init(&b, sb, wb, origin);
+    /* Below this the distances themselves are rounding noise. */
+    tol = mk_max(tolerance, TOI_TOL_FLOOR * (a.rho + b.rho + mk_v3_len(b.c) + mk_v3_len(mk_v3_sub(b.dc, a.dc))));
+    out->iterations = 0;
+    for (iter = 0; iter < TOI_MAX_ITERATIONS; ++iter) {
+        mk_real step;
+        int clear;
+        if ((st = distance_at(&a, &b, t, origin, &cache, &q)) != MK_OK) return st;
+        ++out->iterations;
+        if (q.distance <= target + tol) {
+            toi_finish(out, iter == 0 && q.distance < 0 ? MK_TOI_OVERLAPPED : MK_TOI_HIT, t, &a, &b, &q, origin);
+            return MK_OK;
+        }
+        if (method == MK_TOI_METHOD_BILATERAL) step = bilateral(&a, &b, &q, t, t_max, target, tol, origin, &clear);
+        else step = advance(&a, &b, &q, target, t_max - t, method, &clear);
+        if (clear) {
+            toi_finish(out, MK_TOI_SEPARATED, t_max, &a, &b, &q, origin);
+            return MK_OK;
+        }
+        t = mk_min(t + step, t_max);
+    }
+    toi_finish(out, MK_TOI_FAILED, t, &a, &b, &q, origin);
+    return MK_OK;
+}
+
+static mk_status toi_check(const mk_shape *a, const mk_sweep *sa, const mk_shape *b, const mk_sweep *sb, mk_real target,
+                           mk_real tolerance)
+{
+    mk_status st;
+    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
+    if ((st = mk_sweep_validate(sa)) != MK_OK || (st = mk_sweep_validate(sb)) != MK_OK) return st;
+    if (!mk_real_is_valid(target) || !mk_real_is_valid(tolerance)) return MK_ERR_NOT_FINITE;
+    if (target < 0 || tolerance < 0) return MK_ERR_BAD_ARGUMENT;
+    if (a->type == MK_SHAPE_PLANE && b->type == MK_SHAPE_PLANE) return MK_ERR_UNSUPPORTED;
+    if ((a->type == MK_SHAPE_PLANE && mk_v3_len(sa->rotation) > TOI_PLANE_STILL) ||
+        (b->type == MK_SHAPE_PLANE && mk_v3_len(sb->rotation) > TOI_PLANE_STILL))
+        return MK_ERR_UNSUPPORTED;
+    return MK_OK;
+}
+
+mk_status mk_toi(const mk_shape *a, const mk_sweep *sa, const mk_shape *b, const mk_sweep *sb, mk_real target, mk_real tolerance,
+                 mk_toi_result *out)
+{
+    mk_status st;
+    mk_toi_result r;
+    if (!out) return MK_ERR_NULL;
+    if ((st = toi_check(a, sa, b, sb, target, tolerance)) != MK_OK) return st;
+    if ((st = mk_toi_run_(a, sa, b, sb, target, tolerance, 1, MK_TOI_METHOD_TAYLOR, &r)) != MK_OK) return st;
+    *out = r;
+    return MK_OK;
+}
+
+mk_status mk_shape_cast(const mk_shape *a, mk_transform xa, mk_vec3 translation, const mk_shape *b, mk_transform xb, mk_ray_hit *out)
+{
+    mk_sweep sa, sb;
+    mk_toi_result r;
+    mk_status st;
+    if (!out) return MK_ERR_NULL;
+    if (!mk_v3_is_valid(translation)) return MK_ERR_NOT_FINITE;
+    if ((st = mk_sweep_from_velocity(xa, translation, mk_v3_zero(), 1, mk_v3_zero(), &sa)) != MK_OK) return st;
+    if ((st = mk_sweep_from_velocity(xb, mk_v3_zero(), mk_v3_zero(), 1, mk_v3_zero(), &sb)) != MK_OK) return st;
+    if ((st = toi_check(a, &sa, b, &sb, 0, 0)) != MK_OK) return st;
+    if ((st = mk_toi_run_(a, &sa, b, &sb, 0, 0, 1, MK_TOI_METHOD_TAYLOR, &r)) != MK_OK) return st;
+    out->hit = r.state == MK_TOI_HIT || r.state == MK_TOI_OVERLAPPED;
+    out->fraction = out->hit ? r.t : 1;
+    out->point = out->hit ? r.point_b : mk_v3_add(xa.p, translation);
+    out->normal = out->hit ? mk_v3_neg(r.normal) : mk_v3_zero();
+    return MK_OK;
+}
+
+/* ---- host helpers ----------------------------------------------------------- */
+
+static void sweep_advance_unchecked(mk_sweep *sw, mk_real t)
+{
+    sw->q0 = sweep_rotation(sw, t);
+    sw->c0 = mk_v3_lerp(sw->c0, sw->c1, t);
+    sw->rotation = mk_v3_scale(sw->rotation, 1 - t);
+}
+
+mk_status mk_sweep_advance(mk_sweep *sw, mk_real t)
+{
+    mk_status st;
+    if ((st = mk_sweep_validate(sw)) != MK_OK) return st;
+    if (!mk_real_is_valid(t)) return MK_ERR_NOT_FINITE;
+    if (t < 0 || t > 1) return MK_ERR_BAD_ARGUMENT;
+    sweep_advance_unchecked(sw, t);
+    return MK_OK;
+}
+
+static mk_status check_bodies(const mk_toi_body *bodies, int body_count, const mk_toi_pair *pairs, int pair_count, mk_real target,
+                              mk_real tolerance)
+{
+    mk_status st;
+    int i;
+    if (body_count < 0 || pair_count < 0) return MK_ERR_BAD_SIZE;
+    if ((body_count > 0 && !bodies) || (pair_count > 0 && !pairs)) return MK_ERR_NULL;
+    for (i = 0; i < pair_count; ++i)
+        if (pairs[i].a < 0 || pairs[i].a >= body_count || pairs[i].b < 0 || pairs[i].b >= body_count || pairs[i].a == pairs[i].b)
+            return MK_ERR_BAD_ARGUMENT;
+    for (i = 0; i < pair_count; ++i) {
+        const mk_toi_body *a = &bodies[pairs[i].a], *b = &bodies[pairs[i].b];
+        if ((st = toi_check(a->shape, &a->sweep, b->shape, &b->sweep, target, tolerance)) != MK_OK) return st;
+    }
+    return MK_OK;
+}
+
+static mk_status earliest(const mk_toi_body *bodies, const mk_toi_pair *pairs, int pair_count, mk_real target, mk_real tolerance,
+                          mk_toi_event *out)
+{
+    mk_real best = 1;
+    int i;
+    out->pair = -1;
+    out->overlapped = 0;
+    out->receding = 0;
+    for (i = 0; i < pair_count; ++i) {
+        const mk_toi_body *a = &bodies[pairs[i].a], *b = &bodies[pairs[i].b];
+        mk_toi_result r;
+        mk_status st = mk_toi_run_(a->shape, &a->sweep, b->shape, &b->sweep, target, tolerance, best, MK_TOI_METHOD_TAYLOR, &r);
+        if (st != MK_OK) return st;
+        if (r.state == MK_TOI_OVERLAPPED) {
+            ++out->overlapped;
+        } else if (r.state == MK_TOI_HIT && r.t == 0 && r.rate >= 0) {
+            ++out->receding;
+        } else if ((r.state == MK_TOI_HIT || r.state == MK_TOI_FAILED) && (out->pair < 0 || r.t < best)) {
+            best = r.t;
+            out->pair = i;
+            out->result = r;
+        }
+    }
+    return MK_OK;
+}
+
+mk_status mk_toi_earliest(const mk_toi_body *bodies, int body_count, const mk_toi_pair *pairs, int pair_count, mk_real target,
+                          mk_real tolerance, mk_toi_event *out)
+{
+    mk_status st;
+    mk_toi_event ev;
+    if (!out) return MK_ERR_NULL;
+    if ((st = check_bodies(bodies, body_count, pairs, pair_count, target, tolerance)) != MK_OK) return st;
+    if ((st = earliest(bodies, pairs, pair_count, target, tolerance, &ev)) != MK_OK) return st;
+    *out = ev;
+    return MK_OK;
+}
+
+mk_status mk_toi_substep(mk_toi_body *bodies, int body_count, const mk_toi_pair *pairs, int pair_count, mk_real target,
+                         mk_real tolerance, int max_substeps, mk_toi_resolve_fn resolve, void *user, mk_toi_step_stats *stats)
+{
+    mk_toi_step_stats s;
+    mk_status st = MK_OK;
+    int i;
+    if (!stats || !resolve) return MK_ERR_NULL;
+    if (max_substeps < 0) return MK_ERR_BAD_SIZE;
+    s.substeps = s.hits = s.failed = 0;
+    s.time = 0;
+    while (s.substeps < max_substeps) {
+        mk_toi_event ev;
+        mk_real t;
+        /* The host may have rewritten sweeps: check them every round. */
+        if ((st = check_bodies(bodies, body_count, pairs, pair_count, target, tolerance)) != MK_OK) break;
+        if ((st = earliest(bodies, pairs, pair_count, target, tolerance, &ev)) != MK_OK) break;
+        ++s.substeps;
+        if (ev.pair < 0) {
+            s.time = 1;
+            break;
+        }
+        t = ev.result.t;
+        for (i = 0; i < body_count; ++i) sweep_advance_unchecked(&bodies[i].sweep, t);
+        s.time += t * (1 - s.time);
+        if (ev.result.state == MK_TOI_FAILED) {
+            ++s.failed;
+            continue;
+        }
+        ++s.hits;
+        if (resolve(user, bodies, body_count, ev.pair, &ev.result, s.time)) break;
+    }
+    *stats = s;
+    return st;
 }

@@ -17,7 +17,7 @@
 #ifndef MINKO_TOI_H
 #define MINKO_TOI_H
 
-#include "minko/shape.h"
+#include "minko/raycast.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -42,12 +42,89 @@ MK_API mk_status mk_sweep_from_velocity(mk_transform x0, mk_vec3 linear_velocity
 MK_API mk_status mk_sweep_validate(const mk_sweep *sw);
 /* Pose of the shape at t in [0, 1]. */
 MK_API mk_status mk_sweep_transform(const mk_sweep *sw, mk_real t, mk_transform *out);
+/* Restarts the sweep at t in [0, 1]: it then covers [t, 1] of the old motion,
+ * re-parameterised to [0, 1] (same end pose, same velocities per unit time of
+ * the whole step scaled by 1 - t). */
+MK_API mk_status mk_sweep_advance(mk_sweep *sw, mk_real t);
 /* World AABB containing the shape at every t in [0, 1]. Conservative: the
  * union of the start and end boxes grown by the largest gap between an arc
  * and its chord (rho * (1 - cos(angle / 2)), rho the shape's bounding radius
  * about the rotation centre), clipped to the box of the moving bounding
  * sphere. Exact for pure translation. Planes cannot move: MK_ERR_UNSUPPORTED. */
 MK_API mk_status mk_swept_aabb(const mk_shape *s, const mk_sweep *sw, mk_aabb *out);
+
+typedef enum mk_toi_state {
+    MK_TOI_HIT = 0,    /* the shapes come within target + tolerance at t (t = 0: already there) */
+    MK_TOI_SEPARATED,  /* they stay farther apart than target over the whole step; t = 1 */
+    MK_TOI_OVERLAPPED, /* they penetrate at t = 0: time of impact is meaningless, t = 0 */
+    MK_TOI_FAILED      /* iteration cap; t is the latest time proven free of contact */
+} mk_toi_state;
+
+typedef struct mk_toi_result {
+    mk_toi_state state;
+    mk_real t;         /* in [0, 1] */
+    mk_real distance;  /* signed distance at t (at the last time evaluated for SEPARATED) */
+    mk_vec3 normal;    /* unit, world frame, from A towards B, same time */
+    mk_vec3 point_a;   /* witness points, world frame, same time */
+    mk_vec3 point_b;
+    mk_real rate;      /* d(distance)/dt at the witness points: < 0 while the shapes approach */
+    int iterations;    /* distance queries spent */
+} mk_toi_result;
+
+MK_API mk_status mk_toi(const mk_shape *a, const mk_sweep *sa, const mk_shape *b, const mk_sweep *sb, mk_real target,
+                        mk_real tolerance, mk_toi_result *out);
+
+MK_API mk_status mk_shape_cast(const mk_shape *a, mk_transform xa, mk_vec3 translation, const mk_shape *b, mk_transform xb,
+                               mk_ray_hit *out);
+
+/* ---- host helpers: the adaptive step of seed 000 ----------------------------
+ * A host lists its fast bodies (shape + motion over the rest of the step) and
+ * the candidate pairs its broadphase found with swept AABBs, then either asks
+ * for the earliest hit, or lets mk_toi_substep() run the whole loop: advance
+ * every body to the earliest time of impact, let the host resolve that
+ * contact (change velocities, i.e. rewrite sweeps), repeat. Arrays belong to
+ * the caller; nothing allocates. Cost per round: one TOI per pair, each cut
+ * off at the earliest time found so far. */
+
+typedef struct mk_toi_body {
+    const mk_shape *shape;
+    mk_sweep sweep; /* motion over what remains of the step */
+} mk_toi_body;
+
+typedef struct mk_toi_pair { int a, b; } mk_toi_pair; /* indices into the body array */
+
+typedef struct mk_toi_event {
+    int pair;             /* index into the pair array; -1 when no pair hits */
+    mk_toi_result result; /* result.t is relative to the sweeps passed in */
+    int overlapped;       /* pairs skipped because they penetrate at the start */
+    int receding;         /* pairs skipped because they start within target and move apart */
+} mk_toi_event;
+
+/* Earliest HIT (or FAILED, whose t is still a proven-safe time) over the
+ * pairs, lowest pair index on ties. Pairs that penetrate at the start, or
+ * start within target while moving apart, are left to the host's discrete
+ * contacts and counted. */
+MK_API mk_status mk_toi_earliest(const mk_toi_body *bodies, int body_count, const mk_toi_pair *pairs, int pair_count,
+                                 mk_real target, mk_real tolerance, mk_toi_event *out);
+
+/* Called at each hit, after every sweep was advanced to it; `time` is the
+ * fraction of the whole step reached. The host may rewrite any sweep (new
+ * velocities for the rest of the step). Return 0 to go on, non-zero to stop. */
+typedef int (*mk_toi_resolve_fn)(void *user, mk_toi_body *bodies, int body_count, int pair, const mk_toi_result *hit, mk_real time);
+
+typedef struct mk_toi_step_stats {
+    int substeps;  /* rounds run */
+    int hits;      /* resolve calls */
+    int failed;    /* rounds that stopped at a FAILED pair's safe time */
+    mk_real time;  /* fraction of the step reached: 1 unless max_substeps or resolve stopped the loop */
+} mk_toi_step_stats;
+
+/* Runs at most max_substeps rounds. On return (errors included: a sweep the
+ * resolver made invalid stops the loop with its status) every sweep starts at
+ * stats->time and ends where the step ends. */
+MK_API mk_status mk_toi_substep(mk_toi_body *bodies, int body_count, const mk_toi_pair *pairs, int pair_count, mk_real target,
+                                mk_real tolerance, int max_substeps, mk_toi_resolve_fn resolve, void *user,
+                                mk_toi_step_stats *stats);
 
 #ifdef __cplusplus
 }
