@@ -6,6 +6,9 @@
 #include "minko/toi.h"
 #include "shape_internal.h"
 #include "toi_internal.h"
+#ifndef MK_WITHOUT_GJK
+#  include "gjk.h"
+#endif
 
 static mk_status check_transform(mk_transform xf)
 {
@@ -191,9 +194,11 @@ typedef struct toi_body {
     mk_vec3 dc;    /* c1 - c0 */
     mk_vec3 w;     /* rotation over the step */
     mk_real rho;   /* bounding radius about the rotation centre */
-    mk_mat3 R;     /* orientation at the time being expanded */
+    mk_quat q;     /* orientation at the time being expanded */
+    mk_mat3 R;     /* the same as a matrix */
     mk_vec3 c;     /* rotation centre at that time, relative to A's c0 */
     int hint;      /* support vertex hint */
+    int turning;   /* 0: R is the same at every time */
 } toi_body;
 
 /* L(d) = c0 + c1 d + c2 d^2 + c3 d^3 - sum_i h_i(u_i + d v_i), with c2, c3 <= 0. */
@@ -212,15 +217,27 @@ static void body_init(toi_body *b, const mk_shape *s, const mk_sweep *sw, mk_vec
     b->w = s->type == MK_SHAPE_PLANE ? mk_v3_zero() : sw->rotation;
     b->rho = s->type == MK_SHAPE_PLANE ? 0 : bounding_radius(s, sw->local_center);
     b->c = mk_v3_sub(sw->c0, origin);
-    b->R = mk_mat3_from_quat(mk_quat_normalize(sw->q0));
+    b->q = mk_quat_normalize(sw->q0);
+    b->R = mk_mat3_from_quat(b->q);
     b->hint = -1;
+    /* A turn that moves no point by more than the rounding of the coordinates
+     * (equal start and end orientations up to renormalisation) is no turn. */
+    b->turning = mk_v3_len(b->w) * b->rho > 8 * MK_REAL_EPSILON * (b->rho + mk_v3_max_abs(sw->c0));
 }
 
 static void body_at(toi_body *b, mk_real t, mk_vec3 origin)
 {
-    b->R = mk_mat3_from_quat(sweep_rotation(b->sw, t));
+    if (b->turning) {
+        b->q = sweep_rotation(b->sw, t);
+        b->R = mk_mat3_from_quat(b->q);
+    }
     b->c = mk_v3_mad(mk_v3_sub(b->sw->c0, origin), t, b->dc);
 }
+
+/* The shape's own origin at the body's current time, relative to `origin`. */
+static mk_vec3 body_position(const toi_body *b) { return mk_v3_sub(b->c, mk_mat3_mul_v3(b->R, b->sw->local_center)); }
+
+static mk_transform body_pose(const toi_body *b, mk_vec3 origin) { return mk_transform_make(mk_v3_add(body_position(b), origin), b->q); }
 
 /* Support point of the solid along world direction m (not unit), as an
  * offset from the rotation centre. A plane cannot turn and is only ever
@@ -294,49 +311,110 @@ static toi_bound bound_turning(toi_body *T, toi_body *O, mk_vec3 e, mk_vec3 D, m
     return L;
 }
 
+/* What one iteration learns at time t: an upper bound on the distance, a
+ * separating direction (world, from A towards B) and the separation along it
+ * (a lower bound on the distance). */
 typedef struct toi_query {
     mk_real distance;
-    mk_vec3 normal, pa, pb; /* world */
+    mk_vec3 normal;
+    mk_real separation;
 } toi_query;
 
-/* Distance at time t; leaves both bodies' frames at t. A plane's normal is
- * the exact separating axis, so plane pairs need no narrowphase at all. */
-static mk_status distance_at(toi_body *a, toi_body *b, mk_real t, mk_vec3 origin, mk_gjk_cache *cache, toi_query *q)
+/* A plane's normal is the exact separating axis, and two spheres are their
+ * centres' distance: such pairs need no narrowphase (a sphere-only scene never
+ * runs GJK), and the deepest points along the normal are the witnesses. */
+static int plane_pair(const toi_body *a, const toi_body *b) { return a->s->type == MK_SHAPE_PLANE || b->s->type == MK_SHAPE_PLANE; }
+static int sphere_pair(const toi_body *a, const toi_body *b) { return a->s->type == MK_SHAPE_SPHERE && b->s->type == MK_SHAPE_SPHERE; }
+
+static mk_real separation(toi_body *a, toi_body *b, mk_vec3 n)
+{
+    return mk_v3_dot(n, mk_v3_sub(mk_v3_add(b->c, support_rel(b, mk_v3_neg(n))), mk_v3_add(a->c, support_rel(a, n))));
+}
+
+/* Distance bound and normal at t; leaves both bodies' frames at t. The loop
+ * runs GJK on the cores directly (no input checks, no polish, a warm start
+ * from the previous time); the polished answer is computed once, at the end. */
+static mk_status estimate_at(toi_body *a, toi_body *b, mk_real t, mk_vec3 origin, mk_gjk_cache *cache, toi_query *q)
 {
     body_at(a, t, origin);
     body_at(b, t, origin);
-    if (a->s->type == MK_SHAPE_PLANE || b->s->type == MK_SHAPE_PLANE) {
-        toi_body *plane = a->s->type == MK_SHAPE_PLANE ? a : b;
-        mk_vec3 n = mk_mat3_mul_v3(plane->R, plane->s->u.plane.normal), pa, pb;
-        if (plane == b) n = mk_v3_neg(n);
-        pa = mk_v3_add(a->c, support_rel(a, n));
-        pb = mk_v3_add(b->c, support_rel(b, mk_v3_neg(n)));
-        q->normal = n;
-        q->distance = mk_v3_dot(n, mk_v3_sub(pb, pa));
-        /* The plane's witness is the foot of the other shape's deepest point. */
-        if (plane == a) pa = mk_v3_mad(pb, -q->distance, n);
-        else pb = mk_v3_mad(pa, q->distance, n);
-        q->pa = mk_v3_add(pa, origin);
-        q->pb = mk_v3_add(pb, origin);
+    if (plane_pair(a, b)) {
+        q->normal = a->s->type == MK_SHAPE_PLANE ? mk_mat3_mul_v3(a->R, a->s->u.plane.normal)
+                                                 : mk_v3_neg(mk_mat3_mul_v3(b->R, b->s->u.plane.normal));
+        q->distance = q->separation = separation(a, b, q->normal);
         return MK_OK;
-    } else {
+    }
+    if (sphere_pair(a, b)) {
+        mk_vec3 d = mk_v3_sub(body_position(b), body_position(a));
+        mk_real l = mk_v3_len(d);
+        q->normal = l > 0 ? mk_v3_scale(d, 1 / l) : mk_v3(0, 0, 1); /* concentric: any direction is a way out */
+        q->distance = q->separation = l - a->s->radius - b->s->radius;
+        return MK_OK;
+    }
+#ifndef MK_WITHOUT_GJK
+    {
+        mk_pair p;
+        mk_gjk_result g;
+        p.a = a->s;
+        p.b = b->s;
+        p.r = mk_mat3_tmul(a->R, b->R);
+        p.t = mk_mat3_tmul_v3(a->R, mk_v3_sub(body_position(b), body_position(a)));
+        mk_gjk(&p, cache, 0, 0, &g);
+        mk_gjk_cache_store(&g.s, g.normal, cache);
+        q->distance = g.upper - a->s->radius - b->s->radius;
+        if (g.lower > -(mk_real)HUGE_VAL) {
+            q->normal = mk_mat3_mul_v3(a->R, g.normal);
+            q->separation = g.lower - a->s->radius - b->s->radius;
+        } else { /* no lower bound at all: GJK's normal is a placeholder */
+            q->normal = mk_mat3_mul_v3(a->R, mk_v3_normalize(mk_v3_neg(g.v)));
+            q->separation = separation(a, b, q->normal);
+        }
+        return MK_OK;
+    }
+#else
+    {
         mk_distance_result r;
-        mk_status st = mk_distance(a->s, sweep_pose(a->sw, t), b->s, sweep_pose(b->sw, t), cache, &r);
+        mk_status st = mk_distance(a->s, body_pose(a, origin), b->s, body_pose(b, origin), cache, &r);
         q->distance = r.distance;
         q->normal = r.normal;
-        q->pa = r.point_a;
-        q->pb = r.point_b;
+        q->separation = separation(a, b, q->normal);
         return st;
     }
+#endif
 }
 
-/* Rate of change of the distance at the witness points: the relative
- * velocity of the two material points along the normal. */
-static mk_real approach_rate(const toi_body *a, const toi_body *b, const toi_query *q, mk_vec3 origin)
+/* The reported answer at t (frames already at t): the polished distance and
+ * witness points of the narrowphase, or for plane and sphere pairs and when
+ * `exact` is 0 (SEPARATED, FAILED), the deepest points along the last normal. */
+static mk_status answer_at(toi_body *a, toi_body *b, mk_real t, mk_vec3 origin, const toi_query *q, int exact, mk_gjk_cache *cache,
+                           mk_toi_result *out)
 {
-    mk_vec3 va = mk_v3_add(a->dc, mk_v3_cross(a->w, mk_v3_sub(mk_v3_sub(q->pa, origin), a->c)));
-    mk_vec3 vb = mk_v3_add(b->dc, mk_v3_cross(b->w, mk_v3_sub(mk_v3_sub(q->pb, origin), b->c)));
-    return mk_v3_dot(q->normal, mk_v3_sub(vb, va));
+    mk_vec3 pa, pb, va, vb;
+    out->t = t;
+    if (exact && !plane_pair(a, b) && !sphere_pair(a, b)) {
+        mk_distance_result r;
+        mk_status st = mk_distance(a->s, body_pose(a, origin), b->s, body_pose(b, origin), cache, &r);
+        if (st != MK_OK) return st;
+        out->distance = r.distance;
+        out->normal = r.normal;
+        out->point_a = r.point_a;
+        out->point_b = r.point_b;
+    } else {
+        pa = mk_v3_add(a->c, support_rel(a, q->normal));
+        pb = mk_v3_add(b->c, support_rel(b, mk_v3_neg(q->normal)));
+        out->distance = mk_v3_dot(q->normal, mk_v3_sub(pb, pa));
+        out->normal = q->normal;
+        /* A plane's witness is the foot of the other shape's deepest point. */
+        if (a->s->type == MK_SHAPE_PLANE) pa = mk_v3_mad(pb, -out->distance, q->normal);
+        if (b->s->type == MK_SHAPE_PLANE) pb = mk_v3_mad(pa, out->distance, q->normal);
+        out->point_a = mk_v3_add(pa, origin);
+        out->point_b = mk_v3_add(pb, origin);
+    }
+    /* d(distance)/dt: the relative velocity of the two material points along the normal. */
+    va = mk_v3_add(a->dc, mk_v3_cross(a->w, mk_v3_sub(mk_v3_sub(out->point_a, origin), a->c)));
+    vb = mk_v3_add(b->dc, mk_v3_cross(b->w, mk_v3_sub(mk_v3_sub(out->point_b, origin), b->c)));
+    out->rate = mk_v3_dot(out->normal, mk_v3_sub(vb, va));
+    return MK_OK;
 }
 
 /* A bracket [lo, hi] of the root of L: L(lo) >= 0 > L(hi). */
@@ -391,30 +469,25 @@ static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real tar
 {
     mk_vec3 n = q->normal, D = mk_v3_sub(b->c, a->c), V = mk_v3_sub(b->dc, a->dc);
     toi_bound L = bound_fixed(a, b, n, D, V, target);
-    mk_real g0, slope, rate, step;
+    mk_real g0, rate, step;
     *clear = 0;
-    g0 = bound_eval(&L, 0, &slope);
-    if (!(g0 > 0)) {
-        /* n does not separate to working precision: Mirtich's bound on the distance itself. */
-        rate = mk_v3_len(V) + mk_v3_len(a->w) * a->rho + mk_v3_len(b->w) * b->rho;
-        step = (q->distance - target) / rate;
-        *clear = step >= dmax;
-        return mk_min(step, dmax);
-    }
+    g0 = q->separation - target; /* = L(0) */
+    if (!(g0 > 0)) return 0;        /* n does not separate the shapes beyond target: no proof from it */
     rate = -L.c1 + mk_v3_len(L.v[0]) * a->rho + mk_v3_len(L.v[1]) * b->rho;
     step = rate > 0 ? g0 / rate : dmax;
     if (step >= dmax) {
         *clear = 1;
         return dmax;
     }
-    if (method == MK_TOI_METHOD_MIRTICH) return step;
+    /* Without turns L is the straight line g0 + c1 d: Mirtich's step is its root. */
+    if (method == MK_TOI_METHOD_MIRTICH || (!a->turning && !b->turning)) return step;
     step = bound_root(&L, step, dmax, clear);
     /* A plane's support is finite only along its normal, which the fixed axis already follows. */
-    if (!*clear && mk_v3_len2(a->w) > 0 && b->s->type != MK_SHAPE_PLANE) {
+    if (!*clear && a->turning && b->s->type != MK_SHAPE_PLANE) {
         L = bound_turning(a, b, n, D, V, target);
         step = bound_root(&L, step, dmax, clear);
     }
-    if (!*clear && mk_v3_len2(b->w) > 0 && a->s->type != MK_SHAPE_PLANE) {
+    if (!*clear && b->turning && a->s->type != MK_SHAPE_PLANE) {
         L = bound_turning(b, a, mk_v3_neg(n), mk_v3_neg(D), mk_v3_neg(V), target);
         step = bound_root(&L, step, dmax, clear);
     }
@@ -427,13 +500,13 @@ static mk_real axis_separation(toi_body *a, toi_body *b, mk_vec3 n, mk_real t, m
 {
     body_at(a, t, origin);
     body_at(b, t, origin);
-    return mk_v3_dot(n, mk_v3_sub(mk_v3_add(b->c, support_rel(b, mk_v3_neg(n))), mk_v3_add(a->c, support_rel(a, n))));
+    return separation(a, b, n);
 }
 
 static mk_real bilateral(toi_body *a, toi_body *b, const toi_query *q, mk_real t0, mk_real t1, mk_real target, mk_real tol,
                          mk_vec3 origin, int *clear)
 {
-    mk_real lo = t0, hi = t1, slo = q->distance - target, shi = axis_separation(a, b, q->normal, t1, origin) - target;
+    mk_real lo = t0, hi = t1, slo = q->separation - target, shi = axis_separation(a, b, q->normal, t1, origin) - target;
     int i;
     *clear = shi > tol;
     if (shi > -tol) return t1 - t0;
@@ -452,18 +525,6 @@ static mk_real bilateral(toi_body *a, toi_body *b, const toi_query *q, mk_real t
     return lo - t0;
 }
 
-static void toi_finish(mk_toi_result *out, mk_toi_state state, mk_real t, const toi_body *a, const toi_body *b, const toi_query *q,
-                       mk_vec3 origin)
-{
-    out->state = state;
-    out->t = t;
-    out->distance = q->distance;
-    out->normal = q->normal;
-    out->point_a = q->pa;
-    out->point_b = q->pb;
-    out->rate = approach_rate(a, b, q, origin);
-}
-
 mk_status mk_toi_run_(const mk_shape *sa, const mk_sweep *wa, const mk_shape *sb, const mk_sweep *wb, mk_real target, mk_real tolerance,
                       mk_real t_max, int method, mk_toi_result *out)
 {
@@ -471,7 +532,7 @@ mk_status mk_toi_run_(const mk_shape *sa, const mk_sweep *wa, const mk_shape *sb
     toi_query q;
     mk_gjk_cache cache;
     mk_vec3 origin = wa->c0;
-    mk_real t = 0, tol;
+    mk_real t = 0, t_eval = 0, tol;
     mk_status st;
     int iter;
     memset(&cache, 0, sizeof cache);
@@ -483,22 +544,42 @@ mk_status mk_toi_run_(const mk_shape *sa, const mk_sweep *wa, const mk_shape *sb
     for (iter = 0; iter < TOI_MAX_ITERATIONS; ++iter) {
         mk_real step;
         int clear;
-        if ((st = distance_at(&a, &b, t, origin, &cache, &q)) != MK_OK) return st;
+        if ((st = estimate_at(&a, &b, t, origin, &cache, &q)) != MK_OK) return st;
         ++out->iterations;
         if (q.distance <= target + tol) {
-            toi_finish(out, iter == 0 && q.distance < 0 ? MK_TOI_OVERLAPPED : MK_TOI_HIT, t, &a, &b, &q, origin);
+            /* Cores that GJK finds touching only bound the distance by -(rA + rB): the
+             * narrowphase's signed answer tells a touch from a penetration at the start. */
+            if ((st = answer_at(&a, &b, t, origin, &q, 1, &cache, out)) != MK_OK) return st;
+            out->state = iter == 0 && out->distance < -tol ? MK_TOI_OVERLAPPED : MK_TOI_HIT;
             return MK_OK;
         }
         if (method == MK_TOI_METHOD_BILATERAL) step = bilateral(&a, &b, &q, t, t_max, target, tol, origin, &clear);
         else step = advance(&a, &b, &q, target, t_max - t, method, &clear);
+        if (!(step > 0) && !clear && !plane_pair(&a, &b) && !sphere_pair(&a, &b)) {
+            /* GJK stopped early with a poor normal: retry once with the narrowphase's polished one. */
+            mk_toi_result r;
+            if ((st = answer_at(&a, &b, t, origin, &q, 1, &cache, &r)) != MK_OK) return st;
+            q.normal = r.normal;
+            step = advance(&a, &b, &q, target, t_max - t, method, &clear);
+            if (!(step > 0) && !clear) break;
+        }
         if (clear) {
-            toi_finish(out, MK_TOI_SEPARATED, t_max, &a, &b, &q, origin);
+            /* Frames back at the last time evaluated, for the reported witnesses. */
+            body_at(&a, t, origin);
+            body_at(&b, t, origin);
+            out->state = MK_TOI_SEPARATED;
+            answer_at(&a, &b, t, origin, &q, 0, &cache, out);
+            out->t = t_max;
             return MK_OK;
         }
+        t_eval = t;
         t = mk_min(t + step, t_max);
     }
-    toi_finish(out, MK_TOI_FAILED, t, &a, &b, &q, origin);
-    return MK_OK;
+    /* Report the last time evaluated: proven free of contact, and the frames are there. */
+    body_at(&a, t_eval, origin);
+    body_at(&b, t_eval, origin);
+    out->state = MK_TOI_FAILED;
+    return answer_at(&a, &b, t_eval, origin, &q, 0, &cache, out);
 }
 
 static mk_status toi_check(const mk_shape *a, const mk_sweep *sa, const mk_shape *b, const mk_sweep *sb, mk_real target,

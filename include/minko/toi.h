@@ -60,12 +60,16 @@ typedef enum mk_toi_state {
     MK_TOI_FAILED      /* iteration cap; t is the latest time proven free of contact */
 } mk_toi_state;
 
+/* For HIT and OVERLAPPED the geometry is the narrowphase's answer at t. For
+ * SEPARATED and FAILED it describes the last time evaluated (t itself for
+ * FAILED): the separation along the last normal and the shapes' deepest
+ * points along it. */
 typedef struct mk_toi_result {
     mk_toi_state state;
     mk_real t;         /* in [0, 1] */
-    mk_real distance;  /* signed distance at t (at the last time evaluated for SEPARATED) */
-    mk_vec3 normal;    /* unit, world frame, from A towards B, same time */
-    mk_vec3 point_a;   /* witness points, world frame, same time */
+    mk_real distance;  /* signed distance */
+    mk_vec3 normal;    /* unit, world frame, from A towards B */
+    mk_vec3 point_a;   /* witness points, world frame */
     mk_vec3 point_b;
     mk_real rate;      /* d(distance)/dt at the witness points: < 0 while the shapes approach */
     int iterations;    /* distance queries spent */
