@@ -20,6 +20,8 @@
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
+#include "minko_bullet.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -87,8 +89,12 @@ struct Backend {
 
 const Backend kBackends[] = {
     {"native", false, false},
+    {"minko_bp", true, false},
 };
 const int kBackendCount = (int)(sizeof kBackends / sizeof kBackends[0]);
+
+// Which Minko broadphase structure the minko backends use (--bp).
+mk_bp_kind g_bp_kind = MK_BP_AUTO;
 
 // Everything one world needs, built for one backend and torn down in reverse.
 struct Pipeline {
@@ -100,10 +106,10 @@ struct Pipeline {
 
     explicit Pipeline(const Backend &b)
     {
-        (void)b;
         config = new btDefaultCollisionConfiguration();
         dispatcher = new btCollisionDispatcher(config);
-        broadphase = new btDbvtBroadphase();
+        if (b.minko_broadphase) broadphase = new mkb::Broadphase(g_bp_kind);
+        else broadphase = new btDbvtBroadphase();
         solver = new btSequentialImpulseConstraintSolver();
         world = new TimedWorld(dispatcher, broadphase, solver, config);
         // Pairs processed in uid order and islands sorted: the only way two
@@ -727,11 +733,12 @@ void write_json(FILE *f, const SceneSpec &s, const Result &r)
 void usage(const char *argv0)
 {
     std::fprintf(stderr,
-                 "usage: %s [--quick] [--json FILE] [--scene ID]... [--backend NAME]... [--steps N] [--list]\n"
+                 "usage: %s [--quick] [--json FILE] [--scene ID]... [--backend NAME]... [--steps N] [--bp KIND] [--list]\n"
                  "  --quick      a few-second subset (fewer scenes and steps)\n"
                  "  --scene ID   run only these scenes (repeatable; see --list)\n"
                  "  --backend N  run only these backends (repeatable; native always runs first as the reference)\n"
-                 "  --steps N    override every scene's step count\n",
+                 "  --steps N    override every scene's step count\n"
+                 "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n",
                  argv0);
 }
 
@@ -751,6 +758,10 @@ int main(int argc, char **argv)
         else if (a == "--scene" && i + 1 < argc) only_scenes.push_back(argv[++i]);
         else if (a == "--backend" && i + 1 < argc) only_backends.push_back(argv[++i]);
         else if (a == "--steps" && i + 1 < argc) steps_override = std::atoi(argv[++i]);
+        else if (a == "--bp" && i + 1 < argc) {
+            std::string k = argv[++i];
+            g_bp_kind = k == "sap" ? MK_BP_SAP : k == "hgrid" ? MK_BP_HGRID : k == "brute" ? MK_BP_BRUTE : MK_BP_AUTO;
+        }
         else {
             usage(argv[0]);
             return 2;

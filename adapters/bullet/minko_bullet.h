@@ -16,6 +16,9 @@
 
 #include <btBulletCollisionCommon.h>
 
+#include <vector>
+
+#include "minko/broadphase.h"
 #include "minko/shape.h"
 
 static_assert(sizeof(btScalar) == sizeof(mk_real),
@@ -45,6 +48,81 @@ mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out);
 
 // World pose of the mapped shape for a Bullet world transform.
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map);
+
+// A btBroadphaseInterface on a Minko broadphase (minko/broadphase.h: SAP,
+// hierarchical grid, or the automatic choice). Bullet's own
+// btHashedOverlappingPairCache stays the pair store, so each pair's collision
+// algorithm and manifold live where Bullet expects them; Minko's added and
+// removed pair events are applied to it once per step in
+// calculateOverlappingPairs(). Behaves as btDbvtBroadphase does where Bullet
+// can tell: proxy uids count from 1 in creation order (resetPool() restarts
+// them when empty), destroyProxy() removes the proxy's pairs first, every new
+// pair goes through the cache's needsBroadphaseCollision (group/mask AND, or
+// the user's btOverlapFilterCallback) once, when it starts to overlap, and
+// static-filtered proxies (group StaticFilter only, mask without it, as
+// btDiscreteDynamicsWorld gives static and kinematic bodies) cost Minko nothing
+// against each other unless a filter callback is installed. The pair set is
+// exact on the AABBs Bullet hands in (no fattening, unlike Dbvt's stale
+// pairs). rayTest() and aabbTest() use Minko's queries, are reentrant, and see
+// AABBs set since the last step too; rayTest() grows every proxy by the cast
+// shape's box as Dbvt does. Huge AABBs (btStaticPlaneShape) are ordinary
+// proxies. A NaN AABB is refused and the proxy keeps its last good box
+// (last_error() tells). Memory: one Minko broadphase whose proxy capacity
+// doubles, by rebuilding it, when Bullet adds more proxies than it holds.
+class Broadphase : public btBroadphaseInterface {
+public:
+    // `cache`: a pair cache to use (not owned, not deferred-removal), or
+    // nullptr for an owned btHashedOverlappingPairCache.
+    explicit Broadphase(mk_bp_kind kind = MK_BP_AUTO, btHashedOverlappingPairCache *cache = nullptr,
+                        int initial_capacity = 1024);
+    ~Broadphase() override;
+    Broadphase(const Broadphase &) = delete;
+    Broadphase &operator=(const Broadphase &) = delete;
+
+    btBroadphaseProxy *createProxy(const btVector3 &aabbMin, const btVector3 &aabbMax, int shapeType, void *userPtr,
+                                   int collisionFilterGroup, int collisionFilterMask, btDispatcher *dispatcher) override;
+    void destroyProxy(btBroadphaseProxy *proxy, btDispatcher *dispatcher) override;
+    void setAabb(btBroadphaseProxy *proxy, const btVector3 &aabbMin, const btVector3 &aabbMax,
+                 btDispatcher *dispatcher) override;
+    void getAabb(btBroadphaseProxy *proxy, btVector3 &aabbMin, btVector3 &aabbMax) const override;
+    void rayTest(const btVector3 &rayFrom, const btVector3 &rayTo, btBroadphaseRayCallback &rayCallback,
+                 const btVector3 &aabbMin = btVector3(0, 0, 0), const btVector3 &aabbMax = btVector3(0, 0, 0)) override;
+    void aabbTest(const btVector3 &aabbMin, const btVector3 &aabbMax, btBroadphaseAabbCallback &callback) override;
+    void calculateOverlappingPairs(btDispatcher *dispatcher) override;
+    btOverlappingPairCache *getOverlappingPairCache() override { return m_cache; }
+    const btOverlappingPairCache *getOverlappingPairCache() const override { return m_cache; }
+    void getBroadphaseAabb(btVector3 &aabbMin, btVector3 &aabbMax) const override;
+    void resetPool(btDispatcher *dispatcher) override;
+    void printStats() override;
+
+    // The first error Minko reported since the last call (MK_OK if none).
+    mk_status take_error();
+    const mk_bp *minko() const { return m_bp; }
+
+    struct Proxy;
+
+private:
+    mk_status rebuild(int capacity);
+    void reconcile(btDispatcher *dispatcher);
+    void note(mk_status st)
+    {
+        if (m_error == MK_OK) m_error = st;
+    }
+    bool may_be_minko_static(int group, int mask) const;
+
+    mk_bp *m_bp = nullptr;
+    mk_bp_kind m_kind;
+    int m_capacity;
+    btHashedOverlappingPairCache *m_cache;
+    bool m_own_cache;
+    std::vector<Proxy *> m_proxies;  // live proxies, any order
+    std::vector<Proxy *> m_dirty;    // created or moved since the last update
+    int m_uid = 0;
+    int m_frame = 0;
+    bool m_reconcile = false;        // next update: full mark-and-sweep instead of events
+    const btOverlapFilterCallback *m_filter_seen = nullptr;
+    mk_status m_error = MK_OK;
+};
 
 }  // namespace mkb
 
