@@ -440,23 +440,24 @@ static int bracket_try(toi_bracket *k, const toi_bound *L, mk_real trial)
     return 1;
 }
 
-/* Root of L beyond `from` (where L >= 0 is not yet known), or `from` when L
- * is already negative there; *clear when L stays positive up to dmax. */
-static mk_real bound_root(const toi_bound *L, mk_real from, mk_real dmax, int *clear)
+/* Root of L beyond lo, given L(lo) = glo >= 0 and a supergradient slo there;
+ * *clear when L stays positive up to dmax. The tangent at lo meets zero at or
+ * beyond the root (L is concave), which brackets the root tightly from the
+ * first trial; refinement stops once the gap it could still win, (hi - lo)
+ * times the rate, is below `slack`. */
+static mk_real bound_root(const toi_bound *L, mk_real lo, mk_real glo, mk_real slo, mk_real dmax, mk_real slack, int *clear)
 {
     toi_bracket k;
-    mk_real s;
     int i;
-    k.lo = from;
-    k.glo = bound_eval(L, from, &s);
-    if (k.glo < 0) return from;
-    k.hi = dmax;
-    k.ghi = bound_eval(L, dmax, &k.shi);
-    if (k.ghi >= 0) {
-        *clear = 1;
-        return dmax;
+    k.lo = lo;
+    k.glo = glo;
+    k.hi = slo < 0 ? mk_min(dmax, lo + glo / -slo) : dmax;
+    k.ghi = bound_eval(L, k.hi, &k.shi);
+    if (k.ghi >= 0) { /* L reaches 0 no earlier than its tangent: it is a straight line up to hi */
+        *clear = k.hi >= dmax;
+        return k.hi;
     }
-    for (i = 0; i < TOI_MAX_ROOT_ITERATIONS && k.hi - k.lo > MK_REAL(1e-9) * k.hi; ++i) {
+    for (i = 0; i < TOI_MAX_ROOT_ITERATIONS && (k.hi - k.lo) * -k.shi > slack && k.hi - k.lo > MK_REAL_EPSILON * k.hi; ++i) {
         if (k.shi < 0) bracket_try(&k, L, k.hi - k.ghi / k.shi);
         if (!bracket_try(&k, L, k.lo + (k.hi - k.lo) * k.glo / (k.glo - k.ghi))) break;
     }
@@ -465,15 +466,18 @@ static mk_real bound_root(const toi_bound *L, mk_real from, mk_real dmax, int *c
 
 /* Largest step from t0 proven free of contact (see the section comment).
  * Returns dmax and sets *clear when no contact is possible before dmax. */
-static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real target, mk_real dmax, int method, int *clear)
+static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real target, mk_real tol, mk_real dmax, int method,
+                       int *clear)
 {
     mk_vec3 n = q->normal, D = mk_v3_sub(b->c, a->c), V = mk_v3_sub(b->dc, a->dc);
-    toi_bound L = bound_fixed(a, b, n, D, V, target);
-    mk_real g0, rate, step;
+    toi_bound L[3];
+    mk_real g0, rate, step, best_reach = -1, best_g = 0, best_s = 0;
+    int count = 1, i, best = -1;
     *clear = 0;
+    L[0] = bound_fixed(a, b, n, D, V, target);
     g0 = q->separation - target; /* = L(0) */
     if (!(g0 > 0)) return 0;        /* n does not separate the shapes beyond target: no proof from it */
-    rate = -L.c1 + mk_v3_len(L.v[0]) * a->rho + mk_v3_len(L.v[1]) * b->rho;
+    rate = -L[0].c1 + mk_v3_len(L[0].v[0]) * a->rho + mk_v3_len(L[0].v[1]) * b->rho;
     step = rate > 0 ? g0 / rate : dmax;
     if (step >= dmax) {
         *clear = 1;
@@ -481,17 +485,23 @@ static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real tar
     }
     /* Without turns L is the straight line g0 + c1 d: Mirtich's step is its root. */
     if (method == MK_TOI_METHOD_MIRTICH || (!a->turning && !b->turning)) return step;
-    step = bound_root(&L, step, dmax, clear);
     /* A plane's support is finite only along its normal, which the fixed axis already follows. */
-    if (!*clear && a->turning && b->s->type != MK_SHAPE_PLANE) {
-        L = bound_turning(a, b, n, D, V, target);
-        step = bound_root(&L, step, dmax, clear);
+    if (a->turning && b->s->type != MK_SHAPE_PLANE) L[count++] = bound_turning(a, b, n, D, V, target);
+    if (b->turning && a->s->type != MK_SHAPE_PLANE) L[count++] = bound_turning(b, a, mk_v3_neg(n), mk_v3_neg(D), mk_v3_neg(V), target);
+    /* Refine only the bound whose tangent at Mirtich's step reaches farthest. */
+    for (i = 0; i < count; ++i) {
+        mk_real s, g = bound_eval(&L[i], step, &s), reach = s < 0 ? g / -s : dmax;
+        if (g >= 0 && reach > best_reach) {
+            best = i;
+            best_reach = reach;
+            best_g = g;
+            best_s = s;
+        }
     }
-    if (!*clear && b->turning && a->s->type != MK_SHAPE_PLANE) {
-        L = bound_turning(b, a, mk_v3_neg(n), mk_v3_neg(D), mk_v3_neg(V), target);
-        step = bound_root(&L, step, dmax, clear);
-    }
-    return step;
+    if (best < 0) return step;
+    /* A root within a fraction of the remaining gap (or of the tolerance) is as
+     * good as exact: the bound itself is no closer to the truth. */
+    return bound_root(&L[best], step, best_g, best_s, dmax, mk_max(MK_REAL(0.25) * tol, MK_REAL(0.015625) * g0), clear);
 }
 
 /* Catto's bilateral advancement on the same fixed axis (measured against the
@@ -554,13 +564,13 @@ mk_status mk_toi_run_(const mk_shape *sa, const mk_sweep *wa, const mk_shape *sb
             return MK_OK;
         }
         if (method == MK_TOI_METHOD_BILATERAL) step = bilateral(&a, &b, &q, t, t_max, target, tol, origin, &clear);
-        else step = advance(&a, &b, &q, target, t_max - t, method, &clear);
+        else step = advance(&a, &b, &q, target, tol, t_max - t, method, &clear);
         if (!(step > 0) && !clear && !plane_pair(&a, &b) && !sphere_pair(&a, &b)) {
             /* GJK stopped early with a poor normal: retry once with the narrowphase's polished one. */
             mk_toi_result r;
             if ((st = answer_at(&a, &b, t, origin, &q, 1, &cache, &r)) != MK_OK) return st;
             q.normal = r.normal;
-            step = advance(&a, &b, &q, target, t_max - t, method, &clear);
+            step = advance(&a, &b, &q, target, tol, t_max - t, method, &clear);
             if (!(step > 0) && !clear) break;
         }
         if (clear) {
