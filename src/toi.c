@@ -5,7 +5,6 @@
 #include "minko/distance.h"
 #include "minko/toi.h"
 #include "shape_internal.h"
-#include "toi_internal.h"
 #ifndef MK_WITHOUT_GJK
 #  include "gjk.h"
 #endif
@@ -466,8 +465,7 @@ static mk_real bound_root(const toi_bound *L, mk_real lo, mk_real glo, mk_real s
 
 /* Largest step from t0 proven free of contact (see the section comment).
  * Returns dmax and sets *clear when no contact is possible before dmax. */
-static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real target, mk_real tol, mk_real dmax, int method,
-                       int *clear)
+static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real target, mk_real tol, mk_real dmax, int *clear)
 {
     mk_vec3 n = q->normal, D = mk_v3_sub(b->c, a->c), V = mk_v3_sub(b->dc, a->dc);
     toi_bound L[3];
@@ -484,7 +482,7 @@ static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real tar
         return dmax;
     }
     /* Without turns L is the straight line g0 + c1 d: Mirtich's step is its root. */
-    if (method == MK_TOI_METHOD_MIRTICH || (!a->turning && !b->turning)) return step;
+    if (!a->turning && !b->turning) return step;
     /* A plane's support is finite only along its normal, which the fixed axis already follows. */
     if (a->turning && b->s->type != MK_SHAPE_PLANE) L[count++] = bound_turning(a, b, n, D, V, target);
     if (b->turning && a->s->type != MK_SHAPE_PLANE) L[count++] = bound_turning(b, a, mk_v3_neg(n), mk_v3_neg(D), mk_v3_neg(V), target);
@@ -504,39 +502,9 @@ static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real tar
     return bound_root(&L[best], step, best_g, best_s, dmax, mk_max(MK_REAL(0.25) * tol, MK_REAL(0.015625) * g0), clear);
 }
 
-/* Catto's bilateral advancement on the same fixed axis (measured against the
- * conservative step; not a proof: the root it brackets need not be the first). */
-static mk_real axis_separation(toi_body *a, toi_body *b, mk_vec3 n, mk_real t, mk_vec3 origin)
-{
-    body_at(a, t, origin);
-    body_at(b, t, origin);
-    return separation(a, b, n);
-}
-
-static mk_real bilateral(toi_body *a, toi_body *b, const toi_query *q, mk_real t0, mk_real t1, mk_real target, mk_real tol,
-                         mk_vec3 origin, int *clear)
-{
-    mk_real lo = t0, hi = t1, slo = q->separation - target, shi = axis_separation(a, b, q->normal, t1, origin) - target;
-    int i;
-    *clear = shi > tol;
-    if (shi > -tol) return t1 - t0;
-    for (i = 0; i < 50; ++i) {
-        mk_real t = (i & 1) ? lo + (hi - lo) * slo / (slo - shi) : MK_REAL(0.5) * (lo + hi);
-        mk_real s = axis_separation(a, b, q->normal, t, origin) - target;
-        if (mk_fabs_(s) < tol) return t - t0;
-        if (s > 0) {
-            lo = t;
-            slo = s;
-        } else {
-            hi = t;
-            shi = s;
-        }
-    }
-    return lo - t0;
-}
-
-mk_status mk_toi_run_(const mk_shape *sa, const mk_sweep *wa, const mk_shape *sb, const mk_sweep *wb, mk_real target, mk_real tolerance,
-                      mk_real t_max, int method, mk_toi_result *out)
+/* mk_toi on [0, t_max], inputs already checked. */
+static mk_status toi_run(const mk_shape *sa, const mk_sweep *wa, const mk_shape *sb, const mk_sweep *wb, mk_real target, mk_real tolerance,
+                         mk_real t_max, mk_toi_result *out)
 {
     toi_body a, b;
     toi_query q;
@@ -563,14 +531,13 @@ mk_status mk_toi_run_(const mk_shape *sa, const mk_sweep *wa, const mk_shape *sb
             out->state = iter == 0 && out->distance < -tol ? MK_TOI_OVERLAPPED : MK_TOI_HIT;
             return MK_OK;
         }
-        if (method == MK_TOI_METHOD_BILATERAL) step = bilateral(&a, &b, &q, t, t_max, target, tol, origin, &clear);
-        else step = advance(&a, &b, &q, target, tol, t_max - t, method, &clear);
+        step = advance(&a, &b, &q, target, tol, t_max - t, &clear);
         if (!(step > 0) && !clear && !plane_pair(&a, &b) && !sphere_pair(&a, &b)) {
             /* GJK stopped early with a poor normal: retry once with the narrowphase's polished one. */
             mk_toi_result r;
             if ((st = answer_at(&a, &b, t, origin, &q, 1, &cache, &r)) != MK_OK) return st;
             q.normal = r.normal;
-            step = advance(&a, &b, &q, target, tol, t_max - t, method, &clear);
+            step = advance(&a, &b, &q, target, tol, t_max - t, &clear);
             if (!(step > 0) && !clear) break;
         }
         if (clear) {
@@ -614,7 +581,7 @@ mk_status mk_toi(const mk_shape *a, const mk_sweep *sa, const mk_shape *b, const
     mk_toi_result r;
     if (!out) return MK_ERR_NULL;
     if ((st = toi_check(a, sa, b, sb, target, tolerance)) != MK_OK) return st;
-    if ((st = mk_toi_run_(a, sa, b, sb, target, tolerance, 1, MK_TOI_METHOD_TAYLOR, &r)) != MK_OK) return st;
+    if ((st = toi_run(a, sa, b, sb, target, tolerance, 1, &r)) != MK_OK) return st;
     *out = r;
     return MK_OK;
 }
@@ -629,8 +596,10 @@ mk_status mk_shape_cast(const mk_shape *a, mk_transform xa, mk_vec3 translation,
     if ((st = mk_sweep_from_velocity(xa, translation, mk_v3_zero(), 1, mk_v3_zero(), &sa)) != MK_OK) return st;
     if ((st = mk_sweep_from_velocity(xb, mk_v3_zero(), mk_v3_zero(), 1, mk_v3_zero(), &sb)) != MK_OK) return st;
     if ((st = toi_check(a, &sa, b, &sb, 0, 0)) != MK_OK) return st;
-    if ((st = mk_toi_run_(a, &sa, b, &sb, 0, 0, 1, MK_TOI_METHOD_TAYLOR, &r)) != MK_OK) return st;
-    out->hit = r.state == MK_TOI_HIT || r.state == MK_TOI_OVERLAPPED;
+    if ((st = toi_run(a, &sa, b, &sb, 0, 0, 1, &r)) != MK_OK) return st;
+    /* An iteration cap (FAILED) reports the last fraction proven free of contact
+     * as a hit: a caller moving the shape must not go further. */
+    out->hit = r.state != MK_TOI_SEPARATED;
     out->fraction = out->hit ? r.t : 1;
     out->point = out->hit ? r.point_b : mk_v3_add(xa.p, translation);
     out->normal = out->hit ? mk_v3_neg(r.normal) : mk_v3_zero();
@@ -684,7 +653,7 @@ static mk_status earliest(const mk_toi_body *bodies, const mk_toi_pair *pairs, i
     for (i = 0; i < pair_count; ++i) {
         const mk_toi_body *a = &bodies[pairs[i].a], *b = &bodies[pairs[i].b];
         mk_toi_result r;
-        mk_status st = mk_toi_run_(a->shape, &a->sweep, b->shape, &b->sweep, target, tolerance, best, MK_TOI_METHOD_TAYLOR, &r);
+        mk_status st = toi_run(a->shape, &a->sweep, b->shape, &b->sweep, target, tolerance, best, &r);
         if (st != MK_OK) return st;
         if (r.state == MK_TOI_OVERLAPPED) {
             ++out->overlapped;
