@@ -198,6 +198,7 @@ bench: deps
 	$(MAKE) -j$(JOBS) demo-build
 	@mkdir -p $(BENCH_DIR)
 	@set -e; $(BENCH_RUNS) echo "bench: JSON Lines in $(BENCH_DIR)/"
+	@demos/report.sh $(BENCH_DIR)
 demo: deps
 	$(MAKE) -j$(JOBS) demo-build
 	@mkdir -p $(BENCH_DIR)
