@@ -197,6 +197,7 @@ bench: deps
 	$(MAKE) -j$(JOBS) demo-build
 	@mkdir -p $(BENCH_DIR)
 	@set -e; $(foreach c,$(BENCH_RUNS),echo '>> $(c)'; $(c);) echo "bench: JSON Lines in $(BENCH_DIR)/"
+	@demos/report.sh $(BENCH_DIR)
 demo: deps
 	$(MAKE) -j$(JOBS) demo-build
 	@mkdir -p $(BENCH_DIR)
