@@ -1,0 +1,47 @@
+// contact_writer.h (internal to libminko_bullet): writes one frame's full
+// contact manifold into Bullet's btPersistentManifold, matching points to the
+// cached ones by feature pair instead of by distance, so the solver's
+// warm-start state (m_appliedImpulse, lateral impulses, m_prevRHS, lifetime)
+// follows the contact it belongs to.
+//
+// Contract. The caller gives the points of one pair in Bullet's convention
+// (normal on B pointing from B to A, point on B, signed distance with negative
+// = penetration) plus a feature key per point, for the pair as the algorithm
+// sees it (wrapper 0 = A, wrapper 1 = B). The keys travel in the points'
+// m_partId0/m_partId1 (feature of body 0 / body 1 of the manifold) and
+// m_index0/m_index1 keep the wrappers' own indices; this is only done when
+// the algorithm owns the manifold (a compound or mesh parent shares one
+// manifold among all its children, which compete for its four slots) and both
+// wrappers leave their part ids free (-1; meshes use them for triangle ids).
+// Otherwise every point goes through btManifoldResult::addContactPoint and
+// Bullet's distance matching, as Bullet's own algorithms do. Everything
+// btManifoldResult::addContactPoint does is reproduced: breaking-threshold
+// cut, local anchors on the collision objects, swapped manifolds, combined
+// friction / restitution / rolling / spinning friction and contact
+// stiffness-damping through Bullet's gCalculateCombined*Callback hooks,
+// friction anchors, btPlaneSpace1 friction directions, gContactAddedCallback
+// (with CF_CUSTOM_MATERIAL_CALLBACK) and gContactStartedCallback. A cached
+// point whose features are not reported this frame is removed (the manifold
+// is the whole contact), reusing its slot for a new point first so no
+// spurious gContactEndedCallback fires; new points start with zero impulses.
+#ifndef MINKO_BULLET_CONTACT_WRITER_H
+#define MINKO_BULLET_CONTACT_WRITER_H
+
+#include <btBulletCollisionCommon.h>
+
+namespace mkb {
+
+struct PairContact {
+    btVector3 normal_on_b;  // unit, from B towards A
+    btVector3 point_on_b;   // world
+    btScalar distance;      // signed, negative = penetration
+    int feature_a, feature_b;
+};
+
+// At most MANIFOLD_CACHE_SIZE (4) points; extra points are ignored.
+// `owned`: the manifold belongs to this pair alone.
+void write_contacts(btManifoldResult *result, const PairContact *points, int count, bool owned = true);
+
+}  // namespace mkb
+
+#endif

@@ -1,0 +1,81 @@
+// shapes.cpp: Bullet shapes onto Minko shapes, exactly as Bullet's support
+// functions define the solids (see minko_bullet.h).
+#include "minko_bullet.h"
+
+namespace mkb {
+
+namespace {
+
+// Rotation taking Minko's local z onto Bullet's axis `up` (0 = X, 1 = Y, 2 = Z),
+// with a positive sign: a cone's apex stays on the + side.
+mk_quat axis_rotation(int up)
+{
+    const mk_real h = (mk_real)0.70710678118654752440;
+    switch (up) {
+    case 0: return mk_quat_make(0, h, 0, h);   // +90 deg about y: z -> x
+    case 1: return mk_quat_make(-h, 0, 0, h);  // -90 deg about x: z -> y
+    default: return mk_quat_identity();
+    }
+}
+
+}  // namespace
+
+mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out)
+{
+    if (!shape || !out) return MK_ERR_NULL;
+    ShapeMap m;
+    m.axis = mk_quat_identity();
+    mk_status st;
+    switch (shape->getShapeType()) {
+    case SPHERE_SHAPE_PROXYTYPE:
+        st = mk_shape_sphere(static_cast<const btSphereShape *>(shape)->getRadius(), &m.shape);
+        break;
+    case BOX_SHAPE_PROXYTYPE:
+        // btBoxShape keeps halfExtents - margin internally and its support
+        // function returns the sharp box of the full half extents.
+        st = mk_shape_box(to_mk(static_cast<const btBoxShape *>(shape)->getHalfExtentsWithMargin()), 0, &m.shape);
+        break;
+    case CAPSULE_SHAPE_PROXYTYPE: {
+        const btCapsuleShape *c = static_cast<const btCapsuleShape *>(shape);
+        m.axis = axis_rotation(c->getUpAxis());
+        st = mk_shape_capsule(c->getRadius(), c->getHalfHeight(), &m.shape);
+        break;
+    }
+    case CYLINDER_SHAPE_PROXYTYPE: {
+        // Support = margin-free cylinder of the implicit dimensions + margin:
+        // a cylinder core rounded by the margin. Radius and half height sit on
+        // the axes Bullet's CylinderLocalSupportX/Y/Z read.
+        const btCylinderShape *c = static_cast<const btCylinderShape *>(shape);
+        const int up = c->getUpAxis();
+        const btVector3 &core = c->getHalfExtentsWithoutMargin();
+        m.axis = axis_rotation(up);
+        st = mk_shape_cylinder(core[up == 0 ? 1 : 0], core[up], c->getMargin(), &m.shape);
+        break;
+    }
+    case CONE_SHAPE_PROXYTYPE: {
+        // Support = exact cone (apex at +height/2 on the up axis) + margin.
+        const btConeShape *c = static_cast<const btConeShape *>(shape);
+        m.axis = axis_rotation(c->getConeUpIndex());
+        st = mk_shape_cone(c->getRadius(), c->getHeight() / 2, c->getMargin(), &m.shape);
+        break;
+    }
+    case STATIC_PLANE_PROXYTYPE: {
+        // Solid below the plane n.x = constant; Bullet ignores local scaling here too.
+        const btStaticPlaneShape *p = static_cast<const btStaticPlaneShape *>(shape);
+        st = mk_shape_plane(to_mk(p->getPlaneNormal()), p->getPlaneConstant(), &m.shape);
+        break;
+    }
+    default: return MK_ERR_UNSUPPORTED;
+    }
+    if (st == MK_OK) *out = m;
+    return st;
+}
+
+mk_transform minko_pose(const btTransform &world, const ShapeMap &map)
+{
+    mk_transform t = mk_transform_make(to_mk(world.getOrigin()), to_mk(world.getRotation()));
+    t.q = mk_quat_mul(t.q, map.axis);
+    return t;
+}
+
+}  // namespace mkb

@@ -1,0 +1,874 @@
+// demos/bullet_scenes: Bullet 3.24's own benchmark scenes and a set of stiff and
+// extreme cases, run headless through every collision backend in one process:
+// Bullet native (btDbvtBroadphase + btDefaultCollisionConfiguration) and the Minko
+// backends of adapters/bullet as they exist. Same scene, same solver, same
+// deterministic pair order; only the collision pipeline changes.
+//
+// Per scene and backend it reports: median ms per step (total, collision phase,
+// broadphase part), mean pairs / manifolds with >= 1 point / contact points per
+// step, the deepest penetration seen (judged by one fixed referee for every
+// backend: Bullet's GJK-EPA signed distance on the tight-AABB-overlapping pairs),
+// drift, kinetic energy at the end, tunnelled bodies, and how far the end state is
+// from the native run's. JSON Lines per ../shared/BENCH_FORMAT.md (suite "bullet")
+// with --json FILE, and a table on stdout.
+//
+// Timing: external steady_clock timers around stepSimulation and around the
+// collision world's virtual updateAabbs / computeOverlappingPairs /
+// performDiscreteCollisionDetection; the referee and the counters run outside
+// the timed region.
+
+#include <btBulletDynamicsCommon.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
+
+#include "minko_bullet.h"
+extern "C" {
+#include "support/oracle.h"
+}
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+#if defined(BT_USE_DOUBLE_PRECISION)
+const char *const kBulletTag = "bullet_f64";
+#else
+const char *const kBulletTag = "bullet_f32";
+#endif
+
+typedef std::chrono::steady_clock Clock;
+
+double ms_since(Clock::time_point t0)
+{
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// ---- a world that times its own collision phase ------------------------------
+
+// Wraps any btDiscreteDynamicsWorld subclass. The three overridden members are
+// virtual in btCollisionWorld and performDiscreteCollisionDetection calls the
+// other two, so the timers sit exactly around Bullet's own phases.
+template <class World>
+class Timed : public World {
+public:
+    Timed(btDispatcher *d, btBroadphaseInterface *b, btConstraintSolver *s, btCollisionConfiguration *c)
+        : World(d, b, s, c) {}
+    double aabb_ms = 0, pairs_ms = 0, collision_ms = 0;
+    void reset_timers() { aabb_ms = pairs_ms = collision_ms = 0; }
+    void performDiscreteCollisionDetection() override
+    {
+        Clock::time_point t0 = Clock::now();
+        World::performDiscreteCollisionDetection();
+        collision_ms += ms_since(t0);
+    }
+    void updateAabbs() override
+    {
+        Clock::time_point t0 = Clock::now();
+        World::updateAabbs();
+        aabb_ms += ms_since(t0);
+    }
+    void computeOverlappingPairs() override
+    {
+        Clock::time_point t0 = Clock::now();
+        World::computeOverlappingPairs();
+        pairs_ms += ms_since(t0);
+    }
+};
+typedef Timed<btDiscreteDynamicsWorld> TimedWorld;
+
+// ---- backends -------------------------------------------------------------------
+
+struct Backend {
+    const char *name;
+    bool minko_broadphase;
+    bool minko_narrowphase;
+};
+
+const Backend kBackends[] = {
+    {"native", false, false},
+    {"minko_bp", true, false},
+    {"minko_np", false, true},
+    {"minko", true, true},
+};
+const int kBackendCount = (int)(sizeof kBackends / sizeof kBackends[0]);
+
+// Which Minko broadphase structure the minko backends use (--bp).
+mk_bp_kind g_bp_kind = MK_BP_AUTO;
+
+// Everything one world needs, built for one backend and torn down in reverse.
+struct Pipeline {
+    btCollisionConfiguration *config = nullptr;
+    mkb::CollisionConfiguration *minko_config = nullptr;  // when the narrowphase is Minko's
+    btCollisionDispatcher *dispatcher = nullptr;
+    btBroadphaseInterface *broadphase = nullptr;
+    btSequentialImpulseConstraintSolver *solver = nullptr;
+    TimedWorld *world = nullptr;
+
+    explicit Pipeline(const Backend &b)
+    {
+        if (b.minko_narrowphase) config = minko_config = new mkb::CollisionConfiguration(mkb::Backend::minko);
+        else config = new btDefaultCollisionConfiguration();
+        dispatcher = new btCollisionDispatcher(config);
+        if (b.minko_broadphase) broadphase = new mkb::Broadphase(g_bp_kind);
+        else broadphase = new btDbvtBroadphase();
+        solver = new btSequentialImpulseConstraintSolver();
+        world = new TimedWorld(dispatcher, broadphase, solver, config);
+        // Pairs processed in uid order and islands sorted: the only way two
+        // broadphases that report the same pairs give the same trajectories.
+        world->getDispatchInfo().m_deterministicOverlappingPairs = true;
+    }
+    ~Pipeline()
+    {
+        delete world;  // the world does not own the rest
+        delete solver;
+        delete broadphase;
+        delete dispatcher;
+        delete config;
+    }
+    Pipeline(const Pipeline &) = delete;
+    Pipeline &operator=(const Pipeline &) = delete;
+};
+
+// ---- scenes ---------------------------------------------------------------------
+
+struct BodySpec {
+    int shape;         // index into SceneSpec::shapes
+    btScalar mass;     // 0: static
+    btTransform xf;
+    btVector3 v, w;    // initial linear / angular velocity
+    bool ccd;          // enable the world's continuous collision for this body
+    // Tunnelling test: the body must end with keep_n . p <= keep_d.
+    bool has_keep;
+    btVector3 keep_n;
+    btScalar keep_d;
+};
+
+struct SceneSpec {
+    std::string name, variant;
+    int steps = 600, quick_steps = 0;  // quick_steps 0: not in the --quick subset
+    btScalar dt = btScalar(1) / btScalar(60);
+    int iterations = 10;
+    bool friction_caching = false;     // BenchmarkDemo's SOLVER_ENABLE_FRICTION_DIRECTION_CACHING
+    bool sleep = true;                 // false: every dynamic body DISABLE_DEACTIVATION
+    double drift_from = 0;             // drift measured from this fraction of the run; < 0: not reported
+    int judge_every = 1;               // referee sampling period in steps
+    btScalar friction = btScalar(0.5); // Bullet's default
+    std::vector<btCollisionShape *> shapes;
+    std::vector<BodySpec> bodies;
+
+    SceneSpec() = default;
+    SceneSpec(const SceneSpec &) = delete;
+    SceneSpec &operator=(const SceneSpec &) = delete;
+    ~SceneSpec()
+    {
+        for (btCollisionShape *s : shapes) delete s;
+    }
+    int add_shape(btCollisionShape *s)
+    {
+        shapes.push_back(s);
+        return (int)shapes.size() - 1;
+    }
+    BodySpec &add_body(int shape, btScalar mass, const btTransform &xf)
+    {
+        BodySpec b;
+        b.shape = shape;
+        b.mass = mass;
+        b.xf = xf;
+        b.v = b.w = btVector3(0, 0, 0);
+        b.ccd = false;
+        b.has_keep = false;
+        b.keep_n = btVector3(0, 0, 0);
+        b.keep_d = 0;
+        bodies.push_back(b);
+        return bodies.back();
+    }
+    BodySpec &add_body(int shape, btScalar mass, const btVector3 &p)
+    {
+        btTransform xf;
+        xf.setIdentity();
+        xf.setOrigin(p);
+        return add_body(shape, mass, xf);
+    }
+    // Static ground box whose top face is the plane y = 0.
+    void add_ground(btScalar half_xz, btScalar half_y)
+    {
+        int g = add_shape(new btBoxShape(btVector3(half_xz, half_y, half_xz)));
+        add_body(g, 0, btVector3(0, -half_y, 0));
+    }
+    // A dynamic body that falls through the ground has tunnelled.
+    void keep_above_ground(BodySpec &b, btScalar half_height)
+    {
+        b.has_keep = true;
+        b.keep_n = btVector3(0, -1, 0);
+        b.keep_d = half_height;  // centre below y = -half_height: entirely under the top face
+    }
+    int dynamic_count() const
+    {
+        int n = 0;
+        for (const BodySpec &b : bodies) n += b.mass > 0;
+        return n;
+    }
+};
+
+// splitmix64, so scenes are the same on every platform and in every run.
+struct Rng {
+    unsigned long long s;
+    explicit Rng(unsigned long long seed) : s(seed) {}
+    unsigned long long next()
+    {
+        unsigned long long z = (s += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    double unit() { return (double)(next() >> 11) * (1.0 / 9007199254740992.0); }
+    double range(double lo, double hi) { return lo + (hi - lo) * unit(); }
+};
+
+// BenchmarkDemo's common setup (examples/Benchmarks/BenchmarkDemo.cpp, tag 3.24):
+// 5 solver iterations with friction direction caching, a 500 x 100 x 500 static
+// box whose top is y = 0, gravity -10 (set for every scene).
+void benchmark_setup(SceneSpec &s)
+{
+    s.iterations = 5;
+    s.friction_caching = true;
+    s.add_ground(250, 50);
+}
+
+// "3000 boxes" (createTest1): 47 layers of 8 x 8 boxes of half extent 1, mass 2,
+// pitch 3, each layer shifted by -0.35 in x and z; they fall into a pile.
+void scene_3000_boxes(SceneSpec &s)
+{
+    s.name = "3000_boxes";
+    s.variant = "3008_boxes";
+    s.steps = 600;
+    s.quick_steps = 30;
+    s.drift_from = 2.0 / 3.0;
+    s.judge_every = 10;
+    benchmark_setup(s);
+    const int size = 8;
+    const btScalar cube = 1, spacing = cube;
+    int box = s.add_shape(new btBoxShape(btVector3(cube, cube, cube)));
+    btScalar offset = -size * (cube * 2 + spacing) * btScalar(0.5);
+    btVector3 pos(0, cube * 2, 0);
+    for (int k = 0; k < 47; k++) {
+        for (int j = 0; j < size; j++) {
+            pos[2] = offset + (btScalar)j * (cube * 2 + spacing);
+            for (int i = 0; i < size; i++) {
+                pos[0] = offset + (btScalar)i * (cube * 2 + spacing);
+                s.keep_above_ground(s.add_body(box, 2, pos), cube);
+            }
+        }
+        offset -= btScalar(0.05) * spacing * (size - 1);
+        pos[1] += cube * 2 + spacing;
+    }
+}
+
+// "1000 stack" (createTest2): a 12-level pyramid, three 12-high walls and a
+// circular tower 8 high x 24 around; 1076 boxes of half extent 1, mass 1, at rest.
+void add_pyramid(SceneSpec &s, int box, const btVector3 &at, int stack)
+{
+    const btScalar space = btScalar(0.0001), diff = btScalar(1.02);
+    btScalar offx = -stack * (diff * 2 + space) * btScalar(0.5), offz = offx;
+    btVector3 pos(0, 1, 0);
+    for (; stack > 0; stack--) {
+        for (int j = 0; j < stack; j++) {
+            pos[2] = offz + (btScalar)j * (diff * 2 + space);
+            for (int i = 0; i < stack; i++) {
+                pos[0] = offx + (btScalar)i * (diff * 2 + space);
+                s.keep_above_ground(s.add_body(box, 1, at + pos), 1);
+            }
+        }
+        offx += diff;
+        offz += diff;
+        pos[1] += diff * 2 + space;
+    }
+}
+
+void add_wall(SceneSpec &s, int box, const btVector3 &at, int stack)
+{
+    btScalar offset = -stack * btScalar(2) * btScalar(0.5);
+    btVector3 pos(0, 1, 0);
+    for (; stack > 0; stack--) {
+        for (int i = 0; i < stack; i++) {
+            pos[2] = offset + (btScalar)i * 2;
+            s.keep_above_ground(s.add_body(box, 1, at + pos), 1);
+        }
+        offset += 1;
+        pos[1] += 2;
+    }
+}
+
+void add_tower_circle(SceneSpec &s, int box, const btVector3 &at, int stack, int around)
+{
+    const btScalar radius = btScalar(1.3) * around / SIMD_PI;
+    btQuaternion rot(0, 1, 0, 0);
+    btScalar y = 1;
+    for (int i = 0; i < stack; i++) {
+        for (int j = 0; j < around; j++) {
+            btTransform xf(rot, at + quatRotate(rot, btVector3(0, y, radius)));
+            s.keep_above_ground(s.add_body(box, 1, xf), 1);
+            rot *= btQuaternion(btVector3(0, 1, 0), SIMD_PI / (around * btScalar(0.5)));
+        }
+        y += 2;
+        rot *= btQuaternion(btVector3(0, 1, 0), SIMD_PI / (btScalar)around);
+    }
+}
+
+void scene_1000_stack(SceneSpec &s)
+{
+    s.name = "1000_stack";
+    s.variant = "1076_boxes";
+    s.steps = 600;
+    s.quick_steps = 30;
+    s.drift_from = 0;
+    s.judge_every = 10;
+    benchmark_setup(s);
+    int box = s.add_shape(new btBoxShape(btVector3(1, 1, 1)));
+    add_pyramid(s, box, btVector3(-20, 0, 0), 12);
+    add_wall(s, box, btVector3(-2, 0, 0), 12);
+    add_wall(s, box, btVector3(4, 0, 0), 12);
+    add_wall(s, box, btVector3(10, 0, 0), 12);
+    add_tower_circle(s, box, btVector3(25, 0, 0), 8, 24);
+}
+
+// The 43 input points of BenchmarkDemo's "Taru" barrel
+// (examples/Benchmarks/TaruData.h in the bullet3 repository; 24 distinct points,
+// the hull has 24 vertices). Data, not code: Debian's libbullet-dev does not ship
+// the examples.
+const float kTaru[43][3] = {
+    {1.08664f, -1.99237f, 0.0f}, {0.768369f, -1.99237f, -0.768369f}, {1.28852f, 1.34412e-007f, -1.28852f},
+    {1.82224f, 1.90735e-007f, 0.0f}, {0.0f, -1.99237f, -1.08664f}, {0.0f, 0.0f, -1.82224f},
+    {0.0f, -1.99237f, -1.08664f}, {-0.768369f, -1.99237f, -0.768369f}, {-1.28852f, 1.34412e-007f, -1.28852f},
+    {0.0f, 0.0f, -1.82224f}, {-1.08664f, -1.99237f, 1.82086e-007f}, {-1.82224f, 1.90735e-007f, 1.59305e-007f},
+    {-0.768369f, -1.99237f, 0.76837f}, {-1.28852f, 2.47058e-007f, 1.28852f}, {1.42495e-007f, -1.99237f, 1.08664f},
+    {2.38958e-007f, 2.70388e-007f, 1.82224f}, {0.768369f, -1.99237f, 0.768369f}, {1.28852f, 2.47058e-007f, 1.28852f},
+    {0.768369f, 1.99237f, -0.768369f}, {1.08664f, 1.99237f, 0.0f}, {0.0f, 1.99237f, -1.08664f},
+    {-0.768369f, 1.99237f, -0.768369f}, {0.0f, 1.99237f, -1.08664f}, {-1.08664f, 1.99237f, 0.0f},
+    {-0.768369f, 1.99237f, 0.768369f}, {1.42495e-007f, 1.99237f, 1.08664f}, {0.768369f, 1.99237f, 0.768369f},
+    {1.42495e-007f, -1.99237f, 1.08664f}, {-0.768369f, -1.99237f, 0.76837f}, {-1.08664f, -1.99237f, 1.82086e-007f},
+    {-0.768369f, -1.99237f, -0.768369f}, {0.0f, -1.99237f, -1.08664f}, {0.768369f, -1.99237f, -0.768369f},
+    {1.08664f, -1.99237f, 0.0f}, {0.768369f, -1.99237f, 0.768369f}, {0.768369f, 1.99237f, -0.768369f},
+    {0.0f, 1.99237f, -1.08664f}, {-0.768369f, 1.99237f, -0.768369f}, {-1.08664f, 1.99237f, 0.0f},
+    {-0.768369f, 1.99237f, 0.768369f}, {1.42495e-007f, 1.99237f, 1.08664f}, {0.768369f, 1.99237f, 0.768369f},
+    {1.08664f, 1.99237f, 0.0f},
+};
+
+// "Convex stack" (createTest4): 15 layers of 8 x 8 Taru hulls, mass 1, with
+// polyhedral features (hull-hull by SAT normal + clipping), falling into a pile.
+void scene_convex_stack(SceneSpec &s)
+{
+    s.name = "convex_stack";
+    s.variant = "960_hulls";
+    s.steps = 600;
+    s.quick_steps = 0;
+    s.drift_from = 2.0 / 3.0;
+    s.judge_every = 10;
+    benchmark_setup(s);
+    btConvexHullShape *hull = new btConvexHullShape();
+    for (const float *p : kTaru) hull->addPoint(btVector3(p[0], p[1], p[2]), false);
+    hull->recalcLocalAabb();
+    hull->initializePolyhedralFeatures();
+    int h = s.add_shape(hull);
+    const int size = 8;
+    const btScalar cube = btScalar(1.5);
+    btScalar spacing = cube;
+    btScalar offset = -size * (cube * 2 + spacing) * btScalar(0.5);
+    btVector3 pos(0, cube * 2, 0);
+    for (int k = 0; k < 15; k++) {
+        for (int j = 0; j < size; j++) {
+            pos[2] = offset + (btScalar)j * (cube * 2 + spacing);
+            for (int i = 0; i < size; i++) {
+                pos[0] = offset + (btScalar)i * (cube * 2 + spacing);
+                s.keep_above_ground(s.add_body(h, 1, pos), 2);
+            }
+        }
+        offset -= btScalar(0.05) * spacing * (size - 1);
+        spacing *= btScalar(1.01);
+        pos[1] += cube * 2 + spacing;
+    }
+}
+
+// Stability scenes: Bullet's default solver (10 iterations), no sleeping so
+// jitter shows in drift and kinetic energy instead of being frozen away.
+void stability_setup(SceneSpec &s, btScalar ground_half)
+{
+    s.iterations = 10;
+    s.sleep = false;
+    s.drift_from = 0;
+    s.add_ground(ground_half, 50);
+}
+
+// A column of n boxes of half extent h, exactly touching, on the ground.
+void add_tower(SceneSpec &s, btScalar h, btScalar mass, int n)
+{
+    int box = s.add_shape(new btBoxShape(btVector3(h, h, h)));
+    for (int i = 0; i < n; i++) s.keep_above_ground(s.add_body(box, mass, btVector3(0, h + 2 * h * i, 0)), h);
+}
+
+void scene_tower10(SceneSpec &s)
+{
+    s.name = "tower";
+    s.variant = "10_boxes";
+    s.quick_steps = 120;
+    stability_setup(s, 250);
+    add_tower(s, btScalar(0.5), 1, 10);
+}
+
+void scene_tiny_boxes(SceneSpec &s)
+{
+    s.name = "tiny_boxes";
+    s.variant = "1cm_tower10";
+    stability_setup(s, 250);
+    add_tower(s, btScalar(0.005), btScalar(0.001), 10);
+}
+
+void scene_huge_boxes(SceneSpec &s)
+{
+    s.name = "huge_boxes";
+    s.variant = "100m_tower10";
+    stability_setup(s, 2000);
+    add_tower(s, 50, btScalar(1e6), 10);
+}
+
+// A light cube (1 kg) under a heavy slab (ratio kg): the classic hard case
+// for an iterative solver fed by the contacts the collision layer produces.
+void scene_mass_ratio(SceneSpec &s, int ratio)
+{
+    s.name = "mass_ratio";
+    s.variant = "1:" + std::to_string(ratio);
+    s.quick_steps = ratio == 100 ? 120 : 0;
+    stability_setup(s, 250);
+    int cube = s.add_shape(new btBoxShape(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5))));
+    int slab = s.add_shape(new btBoxShape(btVector3(1, btScalar(0.5), 1)));
+    s.keep_above_ground(s.add_body(cube, 1, btVector3(0, btScalar(0.5), 0)), btScalar(0.5));
+    s.keep_above_ground(s.add_body(slab, (btScalar)ratio, btVector3(0, btScalar(1.5), 0)), btScalar(0.5));
+}
+
+// Spheres of radius 0.05 fired at a 0.1-thick static wall, one lane per speed.
+// A sphere that ends beyond the wall's far face has tunnelled. The "ccd"
+// variant turns on the world's continuous collision for the spheres (Bullet's
+// swept-sphere CCD natively), "discrete" leaves it off as Bullet's default.
+void scene_sphere_wall(SceneSpec &s, bool ccd)
+{
+    static const btScalar speeds[] = {10, 30, 100, 300, 1000};
+    const btScalar r = btScalar(0.05), half_thick = btScalar(0.05);
+    s.name = "sphere_wall";
+    s.variant = ccd ? "ccd" : "discrete";
+    s.steps = 60;
+    s.quick_steps = ccd ? 0 : 60;
+    stability_setup(s, 250);
+    s.drift_from = -1;
+    s.sleep = true;
+    int wall = s.add_shape(new btBoxShape(btVector3(half_thick, 5, 12)));
+    s.add_body(wall, 0, btVector3(0, 5, 0));
+    int ball = s.add_shape(new btSphereShape(r));
+    for (int i = 0; i < 5; i++) {
+        // Start off the step grid so no speed lands exactly on the wall's centre plane.
+        BodySpec &b = s.add_body(ball, btScalar(0.1), btVector3(btScalar(-2.013), 3, btScalar(-8 + 4 * i)));
+        b.v = btVector3(speeds[i], 0, 0);
+        b.ccd = ccd;
+        b.has_keep = true;
+        b.keep_n = btVector3(1, 0, 0);
+        b.keep_d = half_thick + r;
+    }
+}
+
+// 20 random hulls (12-24 points on ellipsoids, semi-axes 0.3-1) dropped from
+// a little height in random orientations; they settle on the ground.
+void scene_random_hulls(SceneSpec &s)
+{
+    s.name = "random_hulls";
+    s.variant = "20_hulls";
+    s.quick_steps = 0;
+    stability_setup(s, 250);
+    s.drift_from = 2.0 / 3.0;
+    Rng rng(20240601);
+    for (int k = 0; k < 20; k++) {
+        btConvexHullShape *hull = new btConvexHullShape();
+        const int n = 12 + (int)(rng.unit() * 13);
+        const double ax = rng.range(0.3, 1), ay = rng.range(0.3, 1), az = rng.range(0.3, 1);
+        for (int i = 0; i < n; i++) {
+            double z = rng.range(-1, 1), t = rng.range(0, 2 * SIMD_PI), q = std::sqrt(1 - z * z);
+            hull->addPoint(btVector3((btScalar)(ax * q * std::cos(t)), (btScalar)(ay * q * std::sin(t)), (btScalar)(az * z)), false);
+        }
+        hull->recalcLocalAabb();
+        hull->initializePolyhedralFeatures();
+        int h = s.add_shape(hull);
+        btQuaternion rot((btScalar)rng.range(-1, 1), (btScalar)rng.range(-1, 1), (btScalar)rng.range(-1, 1), (btScalar)rng.range(-1, 1));
+        rot.normalize();
+        btTransform xf(rot, btVector3((btScalar)(-6 + 3 * (k % 5)), btScalar(1.5), (btScalar)(-4.5 + 3 * (k / 5))));
+        s.keep_above_ground(s.add_body(h, 1, xf), 1);
+    }
+}
+
+struct SceneEntry {
+    const char *id;
+    void (*make)(SceneSpec &, int);
+    int arg;
+};
+void mk_3000(SceneSpec &s, int) { scene_3000_boxes(s); }
+void mk_1000(SceneSpec &s, int) { scene_1000_stack(s); }
+void mk_convex(SceneSpec &s, int) { scene_convex_stack(s); }
+void mk_tower(SceneSpec &s, int) { scene_tower10(s); }
+void mk_ratio(SceneSpec &s, int r) { scene_mass_ratio(s, r); }
+void mk_tiny(SceneSpec &s, int) { scene_tiny_boxes(s); }
+void mk_huge(SceneSpec &s, int) { scene_huge_boxes(s); }
+void mk_wall(SceneSpec &s, int ccd) { scene_sphere_wall(s, ccd != 0); }
+void mk_hulls(SceneSpec &s, int) { scene_random_hulls(s); }
+
+const SceneEntry kScenes[] = {
+    {"3000_boxes", mk_3000, 0},     {"1000_stack", mk_1000, 0},   {"convex_stack", mk_convex, 0},
+    {"tower", mk_tower, 0},         {"mass_ratio_100", mk_ratio, 100}, {"mass_ratio_1000", mk_ratio, 1000},
+    {"tiny_boxes", mk_tiny, 0},     {"huge_boxes", mk_huge, 0},   {"sphere_wall", mk_wall, 0},
+    {"sphere_wall_ccd", mk_wall, 1}, {"random_hulls", mk_hulls, 0},
+};
+
+// ---- running one scene on one backend -----------------------------------------
+
+struct Result {
+    std::string backend;
+    int steps = 0, bodies = 0;
+    double ms = 0, collision_ms = 0, broadphase_ms = 0;  // medians
+    double ms_mean = 0, collision_ms_mean = 0;            // means: sleeping makes the medians bimodal
+    double pairs = 0, manifolds = 0, points = 0;        // means per step
+    double max_penetration = 0, drift = -1, ke_end = 0;
+    int tunnelled = 0, referee_failures = 0;
+    double divergence = -1;                              // max |p - p_native| at the end
+    long minko_pairs = -1, native_pairs = -1;            // Minko narrowphase: algorithms on Minko / left to Bullet
+    std::vector<btVector3> end_pos;
+};
+
+double mean(const std::vector<double> &v)
+{
+    double s = 0;
+    for (double x : v) s += x;
+    return v.empty() ? 0 : s / (double)v.size();
+}
+
+double median(std::vector<double> v)
+{
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+bool is_dynamic(const btCollisionObject *o) { return !o->isStaticOrKinematicObject(); }
+
+// The referee: the deepest penetration among pairs whose tight AABBs overlap,
+// on the solids as Bullet's support functions define them (sharp boxes,
+// hulls and cylinders grown by their margin). One judge for every backend, so
+// no backend grades its own contacts. Pairs with a hull go to Bullet's
+// GJK-EPA, which sees exactly that solid for hulls; all others to the exact
+// long double oracle (tests/support/oracle.h), because Bullet's GJK-EPA
+// rounds a box's corners by its margin.
+class Referee {
+public:
+    ~Referee()
+    {
+        for (auto &kv : m_shapes) {
+            if (kv.second.ok) mk_oracle_shape_free(&kv.second.shape);
+        }
+    }
+    // Penetration depth (>= 0) of a pair, or -1 when it cannot judge it.
+    double depth(const btCollisionObject *a, const btCollisionObject *b)
+    {
+        const btCollisionShape *sa = a->getCollisionShape(), *sb = b->getCollisionShape();
+        if (!sa->isConvex() && sa->getShapeType() != STATIC_PLANE_PROXYTYPE) return -1;
+        if (!sb->isConvex() && sb->getShapeType() != STATIC_PLANE_PROXYTYPE) return -1;
+        if (sa->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE || sb->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE) {
+            btGjkEpaSolver2::sResults r;
+            btVector3 guess = a->getWorldTransform().getOrigin() - b->getWorldTransform().getOrigin();
+            if (guess.length2() == 0) guess = btVector3(1, 0, 0);
+            if (!btGjkEpaSolver2::Penetration((const btConvexShape *)sa, a->getWorldTransform(), (const btConvexShape *)sb,
+                                              b->getWorldTransform(), guess, r, true))
+                return r.status == btGjkEpaSolver2::sResults::EPA_Failed ? -1 : 0;
+            return std::isfinite((double)r.distance) ? std::max(0.0, -(double)r.distance) : -1;
+        }
+        Entry *ea = entry(sa), *eb = entry(sb);
+        if (!ea || !eb) return -1;
+        mk_oracle_pose pa = mk_oracle_pose_of(mkb::minko_pose(a->getWorldTransform(), ea->map));
+        mk_oracle_pose pb = mk_oracle_pose_of(mkb::minko_pose(b->getWorldTransform(), eb->map));
+        mk_oracle_result r;
+        if (mk_oracle_query(&ea->shape, &pa, &eb->shape, &pb, 0, &r) != 0) return -1;
+        return std::max(0.0, -(double)r.distance);
+    }
+
+private:
+    struct Entry {
+        bool ok;
+        mkb::ShapeMap map;
+        mk_oracle_shape shape;
+    };
+    Entry *entry(const btCollisionShape *s)
+    {
+        auto it = m_shapes.find(s);
+        if (it == m_shapes.end()) {
+            Entry e;
+            e.ok = mkb::map_primitive(s, &e.map) == MK_OK && mk_oracle_shape_init(&e.shape, &e.map.shape) == 0;
+            it = m_shapes.insert(std::make_pair(s, e)).first;
+        }
+        return it->second.ok ? &it->second : nullptr;
+    }
+    std::map<const btCollisionShape *, Entry> m_shapes;
+};
+
+double referee_penetration(btCollisionWorld *world, Referee *referee, int *failures)
+{
+    double deepest = 0;
+    btBroadphasePairArray &pairs = world->getPairCache()->getOverlappingPairArray();
+    for (int i = 0; i < pairs.size(); i++) {
+        const btCollisionObject *a = (const btCollisionObject *)pairs[i].m_pProxy0->m_clientObject;
+        const btCollisionObject *b = (const btCollisionObject *)pairs[i].m_pProxy1->m_clientObject;
+        if (!is_dynamic(a) && !is_dynamic(b)) continue;
+        btVector3 amin, amax, bmin, bmax;
+        a->getCollisionShape()->getAabb(a->getWorldTransform(), amin, amax);
+        b->getCollisionShape()->getAabb(b->getWorldTransform(), bmin, bmax);
+        if (!TestAabbAgainstAabb2(amin, amax, bmin, bmax)) continue;
+        double d = referee->depth(a, b);
+        if (d < 0) ++*failures;
+        else deepest = std::max(deepest, d);
+    }
+    return deepest;
+}
+
+double kinetic_energy(const std::vector<btRigidBody *> &bodies)
+{
+    double ke = 0;
+    for (const btRigidBody *b : bodies) {
+        if (b->getInvMass() == 0) continue;
+        const btVector3 &v = b->getLinearVelocity(), &w = b->getAngularVelocity();
+        btVector3 iw = b->getInvInertiaTensorWorld().inverse() * w;
+        ke += 0.5 * (double)(v.length2() / b->getInvMass()) + 0.5 * (double)w.dot(iw);
+    }
+    return ke;
+}
+
+Result run(const SceneSpec &scene, const Backend &backend, int steps)
+{
+    Result res;
+    res.backend = std::string(kBulletTag) + "." + backend.name;
+    res.steps = steps;
+    Pipeline p(backend);
+    TimedWorld *world = p.world;
+    world->setGravity(btVector3(0, -10, 0));
+    world->getSolverInfo().m_numIterations = scene.iterations;
+    if (scene.friction_caching) world->getSolverInfo().m_solverMode |= SOLVER_ENABLE_FRICTION_DIRECTION_CACHING;
+
+    std::vector<btRigidBody *> bodies;
+    for (const BodySpec &bs : scene.bodies) {
+        btCollisionShape *shape = scene.shapes[bs.shape];
+        btVector3 inertia(0, 0, 0);
+        if (bs.mass > 0) shape->calculateLocalInertia(bs.mass, inertia);
+        btRigidBody::btRigidBodyConstructionInfo info(bs.mass, nullptr, shape, inertia);
+        info.m_startWorldTransform = bs.xf;
+        info.m_friction = scene.friction;
+        btRigidBody *body = new btRigidBody(info);
+        if (bs.mass > 0) {
+            body->setLinearVelocity(bs.v);
+            body->setAngularVelocity(bs.w);
+            if (!scene.sleep) body->setActivationState(DISABLE_DEACTIVATION);
+            if (bs.ccd) {
+                btVector3 c;
+                btScalar r;
+                shape->getBoundingSphere(c, r);
+                body->setCcdMotionThreshold(r);
+                body->setCcdSweptSphereRadius(r * btScalar(0.8));
+            }
+        }
+        world->addRigidBody(body);
+        bodies.push_back(body);
+    }
+    res.bodies = scene.dynamic_count();
+
+    const int drift_step = scene.drift_from < 0 ? -1 : (int)(scene.drift_from * steps);
+    std::vector<btVector3> drift_ref;
+    std::vector<double> t_step, t_coll, t_bp;
+    Referee referee;
+    double sum_pairs = 0, sum_manifolds = 0, sum_points = 0;
+    for (int step = 0; step < steps; step++) {
+        if (step == drift_step)
+            for (btRigidBody *b : bodies) drift_ref.push_back(b->getWorldTransform().getOrigin());
+        world->reset_timers();
+        Clock::time_point t0 = Clock::now();
+        world->stepSimulation(scene.dt, 0);
+        t_step.push_back(ms_since(t0));
+        t_coll.push_back(world->collision_ms);
+        t_bp.push_back(world->aabb_ms + world->pairs_ms);
+
+        sum_pairs += world->getPairCache()->getNumOverlappingPairs();
+        btDispatcher *d = world->getDispatcher();
+        for (int m = 0; m < d->getNumManifolds(); m++) {
+            int n = d->getManifoldByIndexInternal(m)->getNumContacts();
+            sum_manifolds += n > 0;
+            sum_points += n;
+        }
+        if (step % scene.judge_every == 0 || step == steps - 1)
+            res.max_penetration = std::max(res.max_penetration, referee_penetration(world, &referee, &res.referee_failures));
+    }
+    res.ms = median(t_step);
+    res.collision_ms = median(t_coll);
+    res.broadphase_ms = median(t_bp);
+    res.ms_mean = mean(t_step);
+    res.collision_ms_mean = mean(t_coll);
+    res.pairs = sum_pairs / steps;
+    res.manifolds = sum_manifolds / steps;
+    res.points = sum_points / steps;
+    res.ke_end = kinetic_energy(bodies);
+    if (p.minko_config) {
+        res.minko_pairs = p.minko_config->stats.minko_algorithms.load();
+        res.native_pairs = p.minko_config->stats.native_fallbacks.load();
+    }
+    if (drift_step >= 0) {
+        res.drift = 0;
+        for (size_t i = 0; i < bodies.size(); i++)
+            if (bodies[i]->getInvMass() > 0)
+                res.drift = std::max(res.drift, (double)(bodies[i]->getWorldTransform().getOrigin() - drift_ref[i]).length());
+    }
+    for (size_t i = 0; i < bodies.size(); i++) {
+        const BodySpec &bs = scene.bodies[i];
+        btVector3 o = bodies[i]->getWorldTransform().getOrigin();
+        res.end_pos.push_back(o);
+        if (bs.has_keep && bs.keep_n.dot(o) > bs.keep_d) res.tunnelled++;
+    }
+
+    for (btRigidBody *b : bodies) {
+        world->removeRigidBody(b);
+        delete b;
+    }
+    return res;
+}
+
+// ---- output ---------------------------------------------------------------------
+
+void print_header()
+{
+    std::printf("%-13s %-13s %-20s %5s %5s %9s %9s %9s %6s %8s %8s %8s %10s %10s %10s %4s %10s\n", "scene", "variant",
+                "backend", "bodies", "steps", "ms/step", "coll_ms", "bp_ms", "coll/n", "pairs", "manif", "points",
+                "max_pen", "drift", "ke_end", "tun", "div_native");
+}
+
+void print_row(const SceneSpec &s, const Result &r, const Result &native)
+{
+    char drift[32] = "-", div[32] = "-", ratio[32] = "-";
+    if (r.drift >= 0) std::snprintf(drift, sizeof drift, "%.3g", r.drift);
+    if (r.divergence >= 0) std::snprintf(div, sizeof div, "%.3g", r.divergence);
+    if (native.collision_ms > 0) std::snprintf(ratio, sizeof ratio, "%.2f", r.collision_ms / native.collision_ms);
+    std::printf("%-13s %-13s %-20s %5d %5d %9.3f %9.3f %9.3f %6s %8.1f %8.1f %8.1f %10.3g %10s %10.3g %4d %10s\n",
+                s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.bodies, r.steps, r.ms, r.collision_ms,
+                r.broadphase_ms, ratio, r.pairs, r.manifolds, r.points, r.max_penetration, drift, r.ke_end, r.tunnelled,
+                div);
+    if (r.referee_failures) std::printf("    (referee: %d pairs it could not judge)\n", r.referee_failures);
+    if (r.minko_pairs >= 0 && r.native_pairs > 0)
+        std::printf("    (narrowphase: %ld pair algorithms on Minko, %ld left to Bullet by this build)\n", r.minko_pairs,
+                    r.native_pairs);
+}
+
+void write_json(FILE *f, const SceneSpec &s, const Result &r)
+{
+    std::fprintf(f,
+                 "{\"suite\":\"bullet\",\"case\":\"%s\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":%d,\"bodies\":%d,"
+                 "\"ms_per_frame\":%.6g,\"collision_ms_per_frame\":%.6g,\"space_ms_per_frame\":%.6g,"
+                 "\"ms_per_frame_mean\":%.6g,\"collision_ms_per_frame_mean\":%.6g,"
+                 "\"pairs\":%.6g,\"manifolds\":%.6g,\"points\":%.6g,\"max_penetration\":%.6g,\"ke_end\":%.6g,"
+                 "\"tunnelled\":%d",
+                 s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.steps, r.bodies, r.ms, r.collision_ms,
+                 r.broadphase_ms, r.ms_mean, r.collision_ms_mean, r.pairs, r.manifolds, r.points, r.max_penetration, r.ke_end, r.tunnelled);
+    if (r.drift >= 0) std::fprintf(f, ",\"drift\":%.6g", r.drift);
+    if (r.divergence >= 0) std::fprintf(f, ",\"divergence_from_native\":%.6g", r.divergence);
+    if (r.referee_failures) std::fprintf(f, ",\"failures\":%d", r.referee_failures);
+    if (r.minko_pairs >= 0)
+        std::fprintf(f, ",\"minko_algorithms\":%ld,\"native_fallbacks\":%ld", r.minko_pairs, r.native_pairs);
+    std::fprintf(f, "}\n");
+}
+
+void usage(const char *argv0)
+{
+    std::fprintf(stderr,
+                 "usage: %s [--quick] [--json FILE] [--scene ID]... [--backend NAME]... [--steps N] [--bp KIND] [--list]\n"
+                 "  --quick      a few-second subset (fewer scenes and steps)\n"
+                 "  --scene ID   run only these scenes (repeatable; see --list)\n"
+                 "  --backend N  run only these backends (repeatable; native always runs first as the reference)\n"
+                 "  --steps N    override every scene's step count\n"
+                 "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n",
+                 argv0);
+}
+
+}  // namespace
+
+int main(int argc, char **argv)
+{
+    bool quick = false, list = false;
+    const char *json = nullptr;
+    int steps_override = 0;
+    std::vector<std::string> only_scenes, only_backends;
+    for (int i = 1; i < argc; i++) {
+        std::string a = argv[i];
+        if (a == "--quick") quick = true;
+        else if (a == "--list") list = true;
+        else if (a == "--json" && i + 1 < argc) json = argv[++i];
+        else if (a == "--scene" && i + 1 < argc) only_scenes.push_back(argv[++i]);
+        else if (a == "--backend" && i + 1 < argc) only_backends.push_back(argv[++i]);
+        else if (a == "--steps" && i + 1 < argc) steps_override = std::atoi(argv[++i]);
+        else if (a == "--bp" && i + 1 < argc) {
+            std::string k = argv[++i];
+            g_bp_kind = k == "sap" ? MK_BP_SAP : k == "hgrid" ? MK_BP_HGRID : k == "brute" ? MK_BP_BRUTE : MK_BP_AUTO;
+        }
+        else {
+            usage(argv[0]);
+            return 2;
+        }
+    }
+    if (list) {
+        for (const SceneEntry &e : kScenes) std::printf("scene   %s\n", e.id);
+        for (const Backend &b : kBackends) std::printf("backend %s\n", b.name);
+        return 0;
+    }
+    FILE *out = nullptr;
+    if (json) {
+        out = std::fopen(json, "w");
+        if (!out) {
+            std::perror(json);
+            return 1;
+        }
+    }
+    std::printf("bullet_scenes: Bullet %d (%s), %s run; times are medians per step in ms, counts are means per step\n",
+                btGetVersion(), kBulletTag, quick ? "quick" : "full");
+    print_header();
+    for (const SceneEntry &e : kScenes) {
+        if (!only_scenes.empty() && std::find(only_scenes.begin(), only_scenes.end(), e.id) == only_scenes.end())
+            continue;
+        SceneSpec scene;
+        e.make(scene, e.arg);
+        if (quick && scene.quick_steps == 0 && only_scenes.empty()) continue;
+        int steps = steps_override > 0 ? steps_override : (quick && scene.quick_steps ? scene.quick_steps : scene.steps);
+        Result native;
+        for (int b = 0; b < kBackendCount; b++) {
+            const Backend &be = kBackends[b];
+            if (b > 0 && !only_backends.empty() &&
+                std::find(only_backends.begin(), only_backends.end(), be.name) == only_backends.end())
+                continue;
+            Result r = run(scene, be, steps);
+            if (b == 0) {
+                native = r;
+            } else {
+                r.divergence = 0;
+                for (size_t i = 0; i < r.end_pos.size(); i++)
+                    r.divergence = std::max(r.divergence, (double)(r.end_pos[i] - native.end_pos[i]).length());
+            }
+            print_row(scene, r, native);
+            if (out) write_json(out, scene, r);
+            std::fflush(stdout);
+        }
+    }
+    if (out) std::fclose(out);
+    return 0;
+}

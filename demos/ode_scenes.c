@@ -1,0 +1,1001 @@
+/* ode_scenes: ODE scenes run side by side through ODE's own collision and
+ * through Minko (adapters/ode), headless.
+ *
+ * Every backend gets its own dWorld with the same bodies, and all worlds are
+ * stepped in turn inside one process, so machine noise hits them alike and
+ * ratios between lines are meaningful. Two things make the worlds comparable
+ * bit for bit (adapters.md B.5): the pairs a space reports are collected,
+ * put in a canonical order (lower geom id first, then sorted) and only then
+ * handed to the real near callback; and ODE's global dRand seed, which
+ * QuickStep uses to shuffle constraint rows, is saved and restored around
+ * each world's step. With identical pair sets and colliders the end states
+ * are then identical, which the `same` column checks against the first
+ * backend of each case.
+ *
+ *   ode_scenes [--quick] [--json FILE] [--scene NAME]
+ *
+ * Per case and backend: median ms per step (space collide, colliders = the
+ * near-callback pass incl. contact joints, total incl. QuickStep), candidate
+ * pairs and contacts per step, maximum contact depth reported during the last
+ * quarter of the run, geometric ground penetration over the same window,
+ * kinetic energy at the end, drift, and tunnelled bodies.
+ */
+#define _POSIX_C_SOURCE 199309L
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <ode/ode.h>
+
+#include "minko_ode.h"
+#include "support/oracle.h"
+
+/* ---- small utilities ---------------------------------------------------- */
+
+typedef struct rng { uint64_t s; } rng;
+static double rng_unit(rng *r) /* splitmix64, uniform in [0, 1) */
+{
+    uint64_t z = (r->s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+static double rng_range(rng *r, double lo, double hi) { return lo + (hi - lo) * rng_unit(r); }
+
+static double now_ms(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
+}
+
+static void *xrealloc(void *p, size_t n)
+{
+    void *q = realloc(p, n ? n : 1);
+    if (!q) {
+        fprintf(stderr, "ode_scenes: out of memory\n");
+        exit(2);
+    }
+    return q;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+static double median(double *v, int n)
+{
+    if (n <= 0) return 0;
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* ---- backends ------------------------------------------------------------ */
+
+typedef void space_collide_fn(dSpaceID space, void *data, dNearCallback *cb);
+typedef int collide_fn(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip);
+
+enum space_kind { SPACE_HASH, SPACE_SAP, SPACE_SIMPLE };
+
+typedef struct backend {
+    const char *name;        /* the JSON `backend` key */
+    enum space_kind space;   /* the container space the geoms live in */
+    space_collide_fn *space_collide;
+    collide_fn *collide;
+} backend;
+
+/* Minko's broadphase keeps its geoms in a dSimpleSpace, the container with
+ * no upkeep of its own (adapters.md B.2).
+ *
+ * The first backend is the reference of the `same` column. It is the SAP
+ * space, not the hash space: ODE 0.16.2's dHashSpace misses overlapping
+ * pairs in the level-0 cells at x = y = 0 whose z range crosses 0 (the
+ * unsigned `getVirtualAddressBase(level, x, y) + zbegin` wraps when it is
+ * negative, so insertion and lookup disagree on the bucket). The SAP space
+ * reports extra plane pairs instead, which yield no contacts. */
+static const backend BACKENDS[] = {
+    {"ode.sap", SPACE_SAP, dSpaceCollide, dCollide},
+    {"ode.hash", SPACE_HASH, dSpaceCollide, dCollide},
+    {"minko.bp", SPACE_SIMPLE, mk_ode_space_collide, dCollide},
+};
+#define NBACKENDS ((int)(sizeof BACKENDS / sizeof BACKENDS[0]))
+
+/* ---- scenes -------------------------------------------------------------- */
+
+enum shape_kind { SH_SPHERE, SH_BOX, SH_HULL };
+
+/* ---- random convex hulls, as ODE convex data and as the exact reference ---- */
+
+/* The hull of 8 to 20 random points on an ellipsoid (semi-axes 0.12 to 0.35 m),
+ * shifted so the centre of mass of the solid is the origin (ODE wants the
+ * body origin there). Faces, planes and extreme vertices come from the
+ * oracle's brute-force long double hull, so native ODE and Minko collide the
+ * same solid and the depth reference is exact. */
+typedef struct hull_data {
+    int nv, nf;
+    dReal *points;             /* 3 nv */
+    dReal *planes;             /* 4 nf: n.x = d, outward unit n */
+    unsigned int *polygons;    /* per face: vertex count, then indices, counter-clockwise from outside */
+    double volume, extent[3];  /* for the (box-approximated) inertia */
+    mk_oracle_shape exact;
+} hull_data;
+
+static mk_lvec3 lv(long double x, long double y, long double z)
+{
+    mk_lvec3 v;
+    v.x = x;
+    v.y = y;
+    v.z = z;
+    return v;
+}
+
+static void hull_make(hull_data *h, rng *r)
+{
+    mk_lvec3 pts[20], apex = lv(0, 0, 0), com = lv(0, 0, 0);
+    mk_oracle_shape tmp;
+    const mk_oracle_poly *P;
+    double ax[3];
+    long double vol = 0;
+    int n = 8 + (int)(rng_unit(r) * 13), i, f, k, w;
+    for (k = 0; k < 3; k++) ax[k] = rng_range(r, 0.12, 0.35);
+    for (i = 0; i < n; i++) {
+        double d[3], l2;
+        do {
+            for (k = 0; k < 3; k++) d[k] = rng_range(r, -1, 1);
+            l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        } while (l2 < 1e-3 || l2 > 1);
+        l2 = sqrt(l2);
+        pts[i] = lv(ax[0] * d[0] / l2, ax[1] * d[1] / l2, ax[2] * d[2] / l2);
+    }
+    if (mk_oracle_shape_points(&tmp, pts, n, 0) != 0) {
+        fprintf(stderr, "ode_scenes: the oracle refused a random hull\n");
+        exit(2);
+    }
+    P = &tmp.core;
+    for (i = 0; i < P->nv; i++) apex = lv(apex.x + P->v[i].x / P->nv, apex.y + P->v[i].y / P->nv, apex.z + P->v[i].z / P->nv);
+    for (f = 0; f < P->nf; f++) { /* fan of tetrahedra from an interior point */
+        const mk_lvec3 *a = &P->v[P->face_vert[P->face_first[f]]];
+        for (k = P->face_first[f] + 1; k + 1 < P->face_first[f + 1]; k++) {
+            const mk_lvec3 *b = &P->v[P->face_vert[k]], *c = &P->v[P->face_vert[k + 1]];
+            mk_lvec3 u = lv(a->x - apex.x, a->y - apex.y, a->z - apex.z), v = lv(b->x - apex.x, b->y - apex.y, b->z - apex.z),
+                     t = lv(c->x - apex.x, c->y - apex.y, c->z - apex.z);
+            long double dv = (u.x * (v.y * t.z - v.z * t.y) - u.y * (v.x * t.z - v.z * t.x) + u.z * (v.x * t.y - v.y * t.x)) / 6;
+            vol += dv;
+            com = lv(com.x + dv * (apex.x + a->x + b->x + c->x) / 4, com.y + dv * (apex.y + a->y + b->y + c->y) / 4,
+                     com.z + dv * (apex.z + a->z + b->z + c->z) / 4);
+        }
+    }
+    com = lv(com.x / vol, com.y / vol, com.z / vol);
+    for (i = 0; i < P->nv; i++) pts[i] = lv(P->v[i].x - com.x, P->v[i].y - com.y, P->v[i].z - com.z);
+    if (mk_oracle_shape_points(&h->exact, pts, P->nv, 0) != 0) {
+        fprintf(stderr, "ode_scenes: the oracle refused a random hull\n");
+        exit(2);
+    }
+    mk_oracle_shape_free(&tmp);
+    P = &h->exact.core;
+    h->nv = P->nv;
+    h->nf = P->nf;
+    h->volume = (double)vol;
+    h->points = xrealloc(NULL, 3 * (size_t)h->nv * sizeof(dReal));
+    h->planes = xrealloc(NULL, 4 * (size_t)h->nf * sizeof(dReal));
+    h->polygons = xrealloc(NULL, ((size_t)h->nf + (size_t)P->face_first[P->nf]) * sizeof(unsigned int));
+    for (k = 0; k < 3; k++) h->extent[k] = 0;
+    for (i = 0; i < h->nv; i++) {
+        double c[3] = {(double)P->v[i].x, (double)P->v[i].y, (double)P->v[i].z};
+        for (k = 0; k < 3; k++) {
+            h->points[3 * i + k] = c[k];
+            if (2 * fabs(c[k]) > h->extent[k]) h->extent[k] = 2 * fabs(c[k]);
+        }
+    }
+    for (f = 0, w = 0; f < h->nf; f++) {
+        const mk_lvec3 *v0 = &P->v[P->face_vert[P->face_first[f]]];
+        h->planes[4 * f] = (dReal)P->fn[f].x;
+        h->planes[4 * f + 1] = (dReal)P->fn[f].y;
+        h->planes[4 * f + 2] = (dReal)P->fn[f].z;
+        h->planes[4 * f + 3] = (dReal)(P->fn[f].x * v0->x + P->fn[f].y * v0->y + P->fn[f].z * v0->z);
+        h->polygons[w++] = (unsigned int)(P->face_first[f + 1] - P->face_first[f]);
+        for (k = P->face_first[f]; k < P->face_first[f + 1]; k++) h->polygons[w++] = (unsigned int)P->face_vert[k];
+    }
+}
+
+static void hull_free(hull_data *h)
+{
+    free(h->points);
+    free(h->planes);
+    free(h->polygons);
+    mk_oracle_shape_free(&h->exact);
+}
+
+/* A dynamic body with one geom. dims: sphere radius; box full side lengths. */
+typedef struct body_rec {
+    dBodyID body;
+    dGeomID geom;
+    enum shape_kind shape;
+    double dims[3];
+    const hull_data *hull;
+    double ref[3]; /* reference position for drift */
+} body_rec;
+
+struct sim;
+
+typedef struct scene {
+    const char *name;
+    const char *variant;
+    void (*build)(struct sim *s, const struct scene *sc);
+    int steps;
+    double dt;
+    int iterations;        /* QuickStep iterations */
+    int max_contacts;
+    dSurfaceParameters surface;
+    int ground;            /* 1: a ground whose top is z = 0 (tunnelled = centre below it) */
+    double wall_x;         /* > 0: tunnelled = centre beyond x = wall_x */
+    enum { DRIFT_NONE, DRIFT_FROM_START, DRIFT_FROM_MID } drift; /* reference pose of `drift` */
+    int n;                 /* scene size parameter (bodies, or speed for the wall) */
+} scene;
+
+typedef struct pair { uint32_t a, b; } pair;
+
+typedef struct sim {
+    const backend *be;
+    const scene *sc;
+    dWorldID world;
+    dSpaceID space;
+    dJointGroupID group;
+    body_rec *bodies;
+    int nbodies, capbodies;
+    dGeomID *geoms; /* by id; dGeomGetData(g) holds the id */
+    int ngeoms, capgeoms;
+    pair *pairs;
+    size_t npairs, cappairs;
+    unsigned long seed; /* this world's dRand state */
+    int step;
+    double *t_space, *t_narrow, *t_total;
+    long long cand_pairs, contacts;
+    double max_depth_late, ground_pen_late;
+} sim;
+
+static uint32_t geom_id(dGeomID g) { return (uint32_t)(uintptr_t)dGeomGetData(g); }
+
+static void register_geom(sim *s, dGeomID g)
+{
+    if (s->ngeoms == s->capgeoms) {
+        s->capgeoms = s->capgeoms ? 2 * s->capgeoms : 64;
+        s->geoms = xrealloc(s->geoms, (size_t)s->capgeoms * sizeof *s->geoms);
+    }
+    dGeomSetData(g, (void *)(uintptr_t)s->ngeoms);
+    s->geoms[s->ngeoms++] = g;
+}
+
+static body_rec *new_body(sim *s, const double pos[3], const dMatrix3 R)
+{
+    body_rec *r;
+    if (s->nbodies == s->capbodies) {
+        s->capbodies = s->capbodies ? 2 * s->capbodies : 64;
+        s->bodies = xrealloc(s->bodies, (size_t)s->capbodies * sizeof *s->bodies);
+    }
+    r = &s->bodies[s->nbodies++];
+    memset(r, 0, sizeof *r);
+    r->body = dBodyCreate(s->world);
+    dBodySetPosition(r->body, pos[0], pos[1], pos[2]);
+    if (R) dBodySetRotation(r->body, R);
+    memcpy(r->ref, pos, sizeof r->ref);
+    return r;
+}
+
+static void attach(sim *s, body_rec *r, dGeomID g, const dMass *m)
+{
+    r->geom = g;
+    dGeomSetBody(g, r->body);
+    dBodySetMass(r->body, m);
+    register_geom(s, g);
+}
+
+static body_rec *add_sphere(sim *s, const double pos[3], const dMatrix3 R, double radius, double density)
+{
+    body_rec *r = new_body(s, pos, R);
+    dMass m;
+    dMassSetSphere(&m, density, radius);
+    r->shape = SH_SPHERE;
+    r->dims[0] = radius;
+    attach(s, r, dCreateSphere(s->space, radius), &m);
+    return r;
+}
+
+static body_rec *add_box(sim *s, const double pos[3], const dMatrix3 R, const double len[3], double density)
+{
+    body_rec *r = new_body(s, pos, R);
+    dMass m;
+    dMassSetBox(&m, density, len[0], len[1], len[2]);
+    r->shape = SH_BOX;
+    memcpy(r->dims, len, sizeof r->dims);
+    attach(s, r, dCreateBox(s->space, len[0], len[1], len[2]), &m);
+    return r;
+}
+
+static dGeomID create_convex(sim *s, const hull_data *h)
+{
+    return dCreateConvex(s->space, h->planes, (unsigned int)h->nf, h->points, (unsigned int)h->nv, h->polygons);
+}
+
+/* The mass is the hull's, its inertia that of the hull's bounding box
+ * scaled to that mass: an approximation, the same for every backend. */
+static body_rec *add_hull(sim *s, const double pos[3], const dMatrix3 R, const hull_data *h, double density)
+{
+    body_rec *r = new_body(s, pos, R);
+    dMass m;
+    dMassSetBox(&m, 1, h->extent[0], h->extent[1], h->extent[2]);
+    dMassAdjust(&m, density * h->volume);
+    r->shape = SH_HULL;
+    r->hull = h;
+    attach(s, r, create_convex(s, h), &m);
+    return r;
+}
+
+static void add_ground_plane(sim *s) { register_geom(s, dCreatePlane(s->space, 0, 0, 1, 0)); }
+
+static void add_static_box(sim *s, const double pos[3], const double len[3])
+{
+    dGeomID g = dCreateBox(s->space, len[0], len[1], len[2]);
+    dGeomSetPosition(g, pos[0], pos[1], pos[2]);
+    register_geom(s, g);
+}
+
+/* ODE's demo_space_stress: spheres of radius [0.05, 0.3), density 5, in
+ * x, y in [-1, 1], z in [2, 3], random rotations, on a plane; gravity -0.5,
+ * CFM 1e-5, QuickStep 0.05 s. They start heavily overlapping. */
+static void build_stress(sim *s, const scene *sc)
+{
+    rng r = {0x5eed0001u};
+    int i;
+    dWorldSetGravity(s->world, 0, 0, -0.5);
+    dWorldSetCFM(s->world, 1e-5);
+    add_ground_plane(s);
+    for (i = 0; i < sc->n; i++) {
+        double radius = (rng_unit(&r) * 0.5 + 0.1) * 0.5;
+        double pos[3];
+        dMatrix3 R;
+        pos[0] = rng_unit(&r) * 2 - 1;
+        pos[1] = rng_unit(&r) * 2 - 1;
+        pos[2] = rng_unit(&r) + 2;
+        dRFromAxisAndAngle(R, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 10 - 5);
+        add_sphere(s, pos, R, radius, 5.0);
+    }
+}
+
+/* Unit boxes stacked exactly face to face on a plane. */
+static void build_tower(sim *s, const scene *sc)
+{
+    static const double len[3] = {1, 1, 1};
+    int i;
+    dWorldSetGravity(s->world, 0, 0, -9.81);
+    add_ground_plane(s);
+    for (i = 0; i < sc->n; i++) {
+        double pos[3] = {0, 0, 0.5 + i};
+        add_box(s, pos, NULL, len, 1.0);
+    }
+}
+
+/* A 2-D pyramid of unit boxes, `rows` rows (20 rows = 210 boxes), 1 cm gaps
+ * between neighbours of a row. */
+static void build_pyramid(sim *s, const scene *sc)
+{
+    static const double len[3] = {1, 1, 1};
+    int rows = sc->n, row, i;
+    dWorldSetGravity(s->world, 0, 0, -9.81);
+    add_ground_plane(s);
+    for (row = 0; row < rows; row++) {
+        int k = rows - row;
+        for (i = 0; i < k; i++) {
+            double pos[3] = {(i - 0.5 * (k - 1)) * 1.01, 0, 0.5 + row};
+            add_box(s, pos, NULL, len, 1.0);
+        }
+    }
+}
+
+/* Spheres and boxes with sizes log-uniform over 1:100 (0.05 m to 5 m),
+ * placed without overlap above a plane and dropped into a heap inside a
+ * 20 x 20 m pit. Mild angular damping stops spheres rolling forever, so the
+ * kinetic energy at the end measures jitter, not free rolling. */
+static void build_mixed(sim *s, const scene *sc)
+{
+    static const double wall_len[2][3] = {{1, 22, 4}, {22, 1, 4}};
+    rng r = {0x5eed0003u};
+    double (*placed)[4] = xrealloc(NULL, (size_t)sc->n * sizeof *placed);
+    int i, j;
+    dWorldSetGravity(s->world, 0, 0, -9.81);
+    dWorldSetAngularDamping(s->world, 0.02);
+    add_ground_plane(s);
+    for (i = 0; i < 4; i++) {
+        double pos[3] = {0, 0, 2};
+        pos[i / 2] = i % 2 ? 10.5 : -10.5;
+        add_static_box(s, pos, wall_len[i / 2]);
+    }
+    for (i = 0; i < sc->n; i++) {
+        double size = 0.05 * pow(100.0, rng_unit(&r)), bound = size, pos[3];
+        int is_box = rng_unit(&r) < 0.5, clear = 0;
+        double len[3];
+        dMatrix3 R;
+        if (is_box) {
+            len[0] = size;
+            len[1] = size * rng_range(&r, 0.5, 1);
+            len[2] = size * rng_range(&r, 0.5, 1);
+            bound = 0.5 * sqrt(len[0] * len[0] + len[1] * len[1] + len[2] * len[2]);
+        } else {
+            bound = 0.5 * size;
+        }
+        pos[0] = rng_range(&r, -1, 1) * (9.9 - bound); /* inside the pit */
+        pos[1] = rng_range(&r, -1, 1) * (9.9 - bound);
+        pos[2] = bound + 0.05;
+        while (!clear) { /* raise it until its bounding sphere is clear of every earlier one */
+            clear = 1;
+            for (j = 0; j < i; j++) {
+                double dx = pos[0] - placed[j][0], dy = pos[1] - placed[j][1], dz = pos[2] - placed[j][2];
+                double need = bound + placed[j][3] + 0.02;
+                if (dx * dx + dy * dy + dz * dz < need * need) {
+                    pos[2] = placed[j][2] + need + 1e-3;
+                    clear = 0;
+                }
+            }
+        }
+        placed[i][0] = pos[0];
+        placed[i][1] = pos[1];
+        placed[i][2] = pos[2];
+        placed[i][3] = bound;
+        dRFromAxisAndAngle(R, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 6.3);
+        if (is_box)
+            add_box(s, pos, R, len, 1.0);
+        else
+            add_sphere(s, pos, R, 0.5 * size, 1.0);
+    }
+    free(placed);
+}
+
+/* Spheres of radius 0.05 fired along +x at a static wall 0.1 m thick
+ * (x in [0, 0.1]), no gravity. WALL_SHOTS spheres per speed, their starting
+ * distances staggered over one step's travel so every phase of the step is
+ * sampled. A sphere whose centre ends beyond x = 0.1 went through. */
+/* The scenes' hulls, made once: ODE keeps pointers to the convex data. */
+#define NHULLS 20
+static hull_data hulls[NHULLS];
+
+/* 20 random hulls dropped from 1 cm onto a static box ground, in a 5 x 4
+ * grid 0.9 m apart (neighbours can meet when they tip over). */
+static void build_hulls(sim *s, const scene *sc)
+{
+    static const double ground_len[3] = {12, 12, 1}, ground_pos[3] = {0, 0, -0.5};
+    rng r = {0x5eed0004u};
+    int i, k;
+    (void)sc;
+    dWorldSetGravity(s->world, 0, 0, -9.81);
+    add_static_box(s, ground_pos, ground_len);
+    for (i = 0; i < NHULLS; i++) {
+        const hull_data *h = &hulls[i];
+        double pos[3], lo = HUGE_VAL;
+        dMatrix3 R;
+        dRFromAxisAndAngle(R, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 6.3);
+        for (k = 0; k < h->nv; k++) {
+            double z = R[8] * h->points[3 * k] + R[9] * h->points[3 * k + 1] + R[10] * h->points[3 * k + 2];
+            if (z < lo) lo = z;
+        }
+        pos[0] = (i % 5 - 2) * 0.9;
+        pos[1] = (i / 5 - 1.5) * 0.9;
+        pos[2] = 0.01 - lo;
+        add_hull(s, pos, R, h, 1000.0);
+    }
+}
+
+#define WALL_SHOTS 8
+static void build_wall(sim *s, const scene *sc)
+{
+    static const double wall_len[3] = {0.1, 4, 4}, wall_pos[3] = {0.05, 0, 0};
+    double v = (double)sc->n, travel = v * sc->dt;
+    int i;
+    dWorldSetGravity(s->world, 0, 0, 0);
+    add_static_box(s, wall_pos, wall_len);
+    for (i = 0; i < WALL_SHOTS; i++) {
+        double pos[3];
+        body_rec *r;
+        pos[0] = -0.5 - travel * (double)i / WALL_SHOTS;
+        pos[1] = -1.5 + 3.0 * (i % 4) / 3.0;
+        pos[2] = i < 4 ? -0.75 : 0.75;
+        r = add_sphere(s, pos, NULL, 0.05, 1000.0);
+        dBodySetLinearVel(r->body, v, 0, 0);
+    }
+}
+
+static dSurfaceParameters surface(int mode, double mu, double bounce, double bounce_vel, double soft_cfm)
+{
+    dSurfaceParameters p;
+    memset(&p, 0, sizeof p);
+    p.mode = mode;
+    p.mu = mu;
+    p.bounce = bounce;
+    p.bounce_vel = bounce_vel;
+    p.soft_cfm = soft_cfm;
+    return p;
+}
+
+/* ---- one world's step ---------------------------------------------------- */
+
+static void collect_cb(void *data, dGeomID o1, dGeomID o2)
+{
+    sim *s = data;
+    uint32_t a = geom_id(o1), b = geom_id(o2);
+    if (s->npairs == s->cappairs) {
+        s->cappairs = s->cappairs ? 2 * s->cappairs : 1024;
+        s->pairs = xrealloc(s->pairs, s->cappairs * sizeof *s->pairs);
+    }
+    s->pairs[s->npairs].a = a < b ? a : b;
+    s->pairs[s->npairs].b = a < b ? b : a;
+    s->npairs++;
+}
+
+static int cmp_pair(const void *x, const void *y)
+{
+    const pair *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    return (p->b > q->b) - (p->b < q->b);
+}
+
+#define MAX_CONTACTS 16
+
+static void contact_pair(sim *s, dGeomID o1, dGeomID o2, int late)
+{
+    dContact c[MAX_CONTACTS];
+    dBodyID b1 = dGeomGetBody(o1), b2 = dGeomGetBody(o2);
+    int i, n;
+    if (b1 && b2 && dAreConnectedExcluding(b1, b2, dJointTypeContact)) return;
+    n = s->be->collide(o1, o2, s->sc->max_contacts, &c[0].geom, (int)sizeof(dContact));
+    s->contacts += n;
+    for (i = 0; i < n; i++) {
+        dJointID j;
+        c[i].surface = s->sc->surface;
+        if (late && c[i].geom.depth > s->max_depth_late) s->max_depth_late = c[i].geom.depth;
+        j = dJointCreateContact(s->world, s->group, &c[i]);
+        dJointAttach(j, b1, b2);
+    }
+}
+
+/* Lowest point of a body's surface (ground scenes, ground top at z = 0). */
+static double lowest_z(const body_rec *r)
+{
+    const dReal *p = dBodyGetPosition(r->body), *R = dBodyGetRotation(r->body);
+    if (r->shape == SH_SPHERE) return p[2] - r->dims[0];
+    if (r->shape == SH_HULL) {
+        double lo = HUGE_VAL;
+        int i;
+        for (i = 0; i < r->hull->nv; i++) {
+            const dReal *q = &r->hull->points[3 * i];
+            double z = p[2] + R[8] * q[0] + R[9] * q[1] + R[10] * q[2];
+            if (z < lo) lo = z;
+        }
+        return lo;
+    }
+    return p[2] - 0.5 * (fabs(R[8]) * r->dims[0] + fabs(R[9]) * r->dims[1] + fabs(R[10]) * r->dims[2]);
+}
+
+static void sim_step(sim *s)
+{
+    const scene *sc = s->sc;
+    int late = s->step >= sc->steps - sc->steps / 4;
+    double t0, t1, t2, t3;
+    size_t i;
+
+    t0 = now_ms();
+    s->npairs = 0;
+    s->be->space_collide(s->space, s, collect_cb);
+    t1 = now_ms();
+    qsort(s->pairs, s->npairs, sizeof *s->pairs, cmp_pair);
+    t2 = now_ms();
+    for (i = 0; i < s->npairs; i++) contact_pair(s, s->geoms[s->pairs[i].a], s->geoms[s->pairs[i].b], late);
+    t3 = now_ms();
+    dRandSetSeed(s->seed);
+    dWorldQuickStep(s->world, sc->dt);
+    s->seed = dRandGetSeed();
+    dJointGroupEmpty(s->group);
+    s->t_space[s->step] = t1 - t0;
+    s->t_narrow[s->step] = t3 - t2;
+    s->t_total[s->step] = now_ms() - t0;
+    s->cand_pairs += (long long)s->npairs;
+
+    if (late && sc->ground) {
+        int k;
+        for (k = 0; k < s->nbodies; k++) {
+            double pen = -lowest_z(&s->bodies[k]);
+            if (pen > s->ground_pen_late) s->ground_pen_late = pen;
+        }
+    }
+    if (sc->drift == DRIFT_FROM_MID && s->step == sc->steps / 2) {
+        int k;
+        for (k = 0; k < s->nbodies; k++) memcpy(s->bodies[k].ref, dBodyGetPosition(s->bodies[k].body), 3 * sizeof(double));
+    }
+    s->step++;
+}
+
+static void sim_init(sim *s, const backend *be, const scene *sc)
+{
+    memset(s, 0, sizeof *s);
+    s->be = be;
+    s->sc = sc;
+    s->world = dWorldCreate();
+    s->space = be->space == SPACE_SAP    ? dSweepAndPruneSpaceCreate(0, dSAP_AXES_XYZ)
+               : be->space == SPACE_HASH ? dHashSpaceCreate(0)
+                                         : dSimpleSpaceCreate(0);
+    s->group = dJointGroupCreate(0);
+    s->seed = 0;
+    dWorldSetQuickStepNumIterations(s->world, sc->iterations);
+    sc->build(s, sc);
+    s->t_space = xrealloc(NULL, (size_t)sc->steps * sizeof(double));
+    s->t_narrow = xrealloc(NULL, (size_t)sc->steps * sizeof(double));
+    s->t_total = xrealloc(NULL, (size_t)sc->steps * sizeof(double));
+}
+
+static void sim_free(sim *s)
+{
+    dJointGroupDestroy(s->group);
+    mk_ode_space_forget(s->space);
+    dSpaceDestroy(s->space);
+    dWorldDestroy(s->world);
+    free(s->bodies);
+    free(s->geoms);
+    free(s->pairs);
+    free(s->t_space);
+    free(s->t_narrow);
+    free(s->t_total);
+}
+
+/* ---- end-of-run metrics -------------------------------------------------- */
+
+typedef struct metrics {
+    double ms_total, ms_collision, ms_space, ms_narrow;
+    double pairs_per_step, contacts_per_step;
+    double max_depth, ground_pen, ke_end, drift;
+    int tunnelled;
+} metrics;
+
+static double kinetic_energy(const body_rec *r)
+{
+    dMass m;
+    const dReal *v = dBodyGetLinearVel(r->body), *w = dBodyGetAngularVel(r->body), *R = dBodyGetRotation(r->body);
+    double wl[3], e;
+    int i;
+    dBodyGetMass(r->body, &m);
+    /* angular velocity in the body frame: R^T w (dMatrix3 is 3 rows of 4) */
+    for (i = 0; i < 3; i++) wl[i] = R[0 * 4 + i] * w[0] + R[1 * 4 + i] * w[1] + R[2 * 4 + i] * w[2];
+    e = 0.5 * m.mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (i = 0; i < 3; i++) e += 0.5 * wl[i] * (m.I[i * 4 + 0] * wl[0] + m.I[i * 4 + 1] * wl[1] + m.I[i * 4 + 2] * wl[2]);
+    return e;
+}
+
+static metrics sim_metrics(sim *s)
+{
+    const scene *sc = s->sc;
+    metrics m;
+    double *coll = xrealloc(NULL, (size_t)sc->steps * sizeof(double));
+    int i;
+    memset(&m, 0, sizeof m);
+    for (i = 0; i < sc->steps; i++) coll[i] = s->t_space[i] + s->t_narrow[i];
+    m.ms_collision = median(coll, sc->steps);
+    m.ms_space = median(s->t_space, sc->steps);
+    m.ms_narrow = median(s->t_narrow, sc->steps);
+    m.ms_total = median(s->t_total, sc->steps);
+    free(coll);
+    m.pairs_per_step = (double)s->cand_pairs / sc->steps;
+    m.contacts_per_step = (double)s->contacts / sc->steps;
+    m.max_depth = s->max_depth_late;
+    m.ground_pen = s->ground_pen_late;
+    for (i = 0; i < s->nbodies; i++) {
+        const body_rec *r = &s->bodies[i];
+        const dReal *p = dBodyGetPosition(r->body);
+        double d = sqrt((p[0] - r->ref[0]) * (p[0] - r->ref[0]) + (p[1] - r->ref[1]) * (p[1] - r->ref[1]) +
+                        (p[2] - r->ref[2]) * (p[2] - r->ref[2]));
+        m.ke_end += kinetic_energy(r);
+        if (sc->drift != DRIFT_NONE && d > m.drift) m.drift = d;
+        if (sc->ground && p[2] < 0) m.tunnelled++;
+        if (sc->wall_x > 0 && p[0] > sc->wall_x) m.tunnelled++;
+    }
+    return m;
+}
+
+/* 1 if both worlds ended in bitwise the same state. */
+static int same_state(const sim *a, const sim *b)
+{
+    int i;
+    if (a->nbodies != b->nbodies) return 0;
+    for (i = 0; i < a->nbodies; i++) {
+        if (memcmp(dBodyGetPosition(a->bodies[i].body), dBodyGetPosition(b->bodies[i].body), 3 * sizeof(dReal)) ||
+            memcmp(dBodyGetQuaternion(a->bodies[i].body), dBodyGetQuaternion(b->bodies[i].body), 4 * sizeof(dReal)))
+            return 0;
+    }
+    return 1;
+}
+
+/* ---- output -------------------------------------------------------------- */
+
+static void print_header(const scene *sc, int nbodies)
+{
+    printf("\n%s %s: %d bodies, %d steps of %g s (ms are medians per step)\n", sc->name, sc->variant, nbodies,
+           sc->steps, sc->dt);
+    printf("  %-10s %8s %8s %8s %8s %9s %9s %9s %9s %10s %9s %4s %4s\n", "backend", "total", "collide", "space",
+           "narrow", "pairs", "contacts", "depth", "ground", "ke_end", "drift", "tun", "same");
+}
+
+static void print_row(const sim *s, const metrics *m, int same)
+{
+    printf("  %-10s %8.3f %8.3f %8.3f %8.3f %9.1f %9.1f %9.2e %9.2e %10.3e %9.2e %4d %4s\n", s->be->name, m->ms_total,
+           m->ms_collision, m->ms_space, m->ms_narrow, m->pairs_per_step, m->contacts_per_step, m->max_depth,
+           m->ground_pen, m->ke_end, m->drift, m->tunnelled, same ? "yes" : "no");
+}
+
+static void json_row(FILE *f, const sim *s, const metrics *m, int same)
+{
+    const scene *sc = s->sc;
+    if (!f) return;
+    fprintf(f,
+            "{\"suite\":\"ode\",\"case\":\"%s\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":%d,\"bodies\":%d,"
+            "\"dt\":%g,\"ms_per_frame\":%.6g,\"collision_ms_per_frame\":%.6g,\"space_ms_per_frame\":%.6g,"
+            "\"narrow_ms_per_frame\":%.6g,\"candidate_pairs_per_frame\":%.6g,\"contacts_per_frame\":%.6g,"
+            "\"max_penetration\":%.6g,\"ground_penetration\":%.6g,\"ke_end\":%.6g,\"drift\":%.6g,\"tunnelled\":%d,"
+            "\"same_end_state_as\":\"%s\",\"same_end_state\":%s}\n",
+            sc->name, sc->variant, s->be->name, sc->steps, s->nbodies, sc->dt, m->ms_total, m->ms_collision,
+            m->ms_space, m->ms_narrow, m->pairs_per_step, m->contacts_per_step, m->max_depth, m->ground_pen,
+            m->ke_end, m->drift, m->tunnelled, BACKENDS[0].name, same ? "true" : "false");
+    fflush(f);
+}
+
+/* ---- driver -------------------------------------------------------------- */
+
+static void run_case(const scene *sc, FILE *json)
+{
+    sim sims[NBACKENDS];
+    int b, step;
+    for (b = 0; b < NBACKENDS; b++) sim_init(&sims[b], &BACKENDS[b], sc);
+    for (step = 0; step < sc->steps; step++)
+        for (b = 0; b < NBACKENDS; b++) sim_step(&sims[b]);
+    print_header(sc, sims[0].nbodies);
+    for (b = 0; b < NBACKENDS; b++) {
+        metrics m = sim_metrics(&sims[b]);
+        int same = same_state(&sims[0], &sims[b]);
+        print_row(&sims[b], &m, same);
+        json_row(json, &sims[b], &m, same);
+    }
+    for (b = 0; b < NBACKENDS; b++) sim_free(&sims[b]);
+}
+
+/* ---- hull-hull penetration depth against the exact reference ---- */
+
+typedef struct depth_case {
+    int a, b;
+    dMatrix3 Ra, Rb;
+    double pa[3], pb[3];
+    double depth;       /* exact, > 0 */
+    mk_lvec3 normal;    /* exact, from a towards b */
+    int normal_defined;
+} depth_case;
+
+static mk_oracle_pose oracle_pose(const dMatrix3 R, const double p[3])
+{
+    mk_oracle_pose x;
+    int i, j;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) x.r[i][j] = R[4 * i + j];
+    x.p = lv(p[0], p[1], p[2]);
+    return x;
+}
+
+/* Random poses of random pairs of the scene's hulls, kept when the exact
+ * answer says they penetrate (deeply or barely). */
+static int make_depth_cases(depth_case *out, int m)
+{
+    rng r = {0x5eed0005u};
+    int k = 0;
+    while (k < m) {
+        depth_case *c = &out[k];
+        mk_oracle_pose xa, xb;
+        mk_oracle_result res;
+        double d[3], l2, dist;
+        int i;
+        c->a = (int)(rng_unit(&r) * NHULLS);
+        c->b = (int)(rng_unit(&r) * NHULLS);
+        dRFromAxisAndAngle(c->Ra, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 6.3);
+        dRFromAxisAndAngle(c->Rb, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 6.3);
+        do {
+            for (i = 0; i < 3; i++) d[i] = rng_range(&r, -1, 1);
+            l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        } while (l2 < 1e-3 || l2 > 1);
+        dist = rng_range(&r, 0.2, 1.0) * (double)(hulls[c->a].exact.size + hulls[c->b].exact.size) / sqrt(l2);
+        c->pa[0] = 5;
+        c->pa[1] = -3;
+        c->pa[2] = 2;
+        for (i = 0; i < 3; i++) c->pb[i] = c->pa[i] + d[i] * dist;
+        xa = oracle_pose(c->Ra, c->pa);
+        xb = oracle_pose(c->Rb, c->pb);
+        if (mk_oracle_query(&hulls[c->a].exact, &xa, &hulls[c->b].exact, &xb, 0, &res) != 0 || !(res.distance < -1e-9L))
+            continue;
+        c->depth = (double)-res.distance;
+        c->normal = res.normal;
+        c->normal_defined = res.normal_defined;
+        k++;
+    }
+    return m;
+}
+
+static double percentile(const double *v, int n, double q)
+{
+    double *w = xrealloc(NULL, (size_t)n * sizeof *w), x;
+    int i = (int)ceil(q * n) - 1;
+    memcpy(w, v, (size_t)n * sizeof *w);
+    qsort(w, (size_t)n, sizeof *w, cmp_double);
+    x = w[i < 0 ? 0 : i];
+    free(w);
+    return x;
+}
+
+/* One backend over all cases: depth = deepest contact, normal = its normal
+ * (ODE's points from b into a, so it is compared with minus the exact one). */
+static void run_depth_backend(const char *name, collide_fn *collide, const depth_case *cases, int m, FILE *json)
+{
+    double *err = xrealloc(NULL, (size_t)m * sizeof *err), *nerr = xrealloc(NULL, (size_t)m * sizeof *nerr);
+    double best = HUGE_VAL;
+    int k, rep, failures = 0, nn = 0;
+    dGeomID g[NHULLS];
+    for (k = 0; k < NHULLS; k++)
+        g[k] = dCreateConvex(0, hulls[k].planes, (unsigned int)hulls[k].nf, hulls[k].points, (unsigned int)hulls[k].nv,
+                             hulls[k].polygons);
+    for (rep = 0; rep < 3; rep++) {
+        double t0 = now_ms();
+        for (k = 0; k < m; k++) {
+            const depth_case *c = &cases[k];
+            dContactGeom ct[MAX_CONTACTS];
+            dGeomID ga = g[c->a], gb = g[c->b];
+            int n, i, deepest = 0;
+            if (c->a == c->b) { /* a hull against a copy of itself */
+                gb = dCreateConvex(0, hulls[c->b].planes, (unsigned int)hulls[c->b].nf, hulls[c->b].points,
+                                   (unsigned int)hulls[c->b].nv, hulls[c->b].polygons);
+            }
+            dGeomSetPosition(ga, c->pa[0], c->pa[1], c->pa[2]);
+            dGeomSetRotation(ga, c->Ra);
+            dGeomSetPosition(gb, c->pb[0], c->pb[1], c->pb[2]);
+            dGeomSetRotation(gb, c->Rb);
+            n = collide(ga, gb, MAX_CONTACTS, ct, (int)sizeof ct[0]);
+            if (c->a == c->b) dGeomDestroy(gb);
+            if (rep) continue;
+            for (i = 1; i < n; i++)
+                if (ct[i].depth > ct[deepest].depth) deepest = i;
+            if (n <= 0 || !(ct[deepest].depth > 0)) {
+                failures++;
+                err[k] = 1;
+                nerr[k] = 180;
+                continue;
+            }
+            err[k] = fabs(ct[deepest].depth - c->depth) / c->depth;
+            nerr[k] = c->normal_defined
+                          ? (double)mk_oracle_angle_deg(c->normal, -ct[deepest].normal[0], -ct[deepest].normal[1], -ct[deepest].normal[2])
+                          : 0;
+            nn++;
+        }
+        if (rep) {
+            double t = (now_ms() - t0) * 1e6 / m;
+            if (t < best) best = t;
+        }
+    }
+    printf("  %-14s %9.0f %10.2e %10.2e %10.2e %10.2e %10.2e %8d\n", name, best, percentile(err, m, 0.5),
+           percentile(err, m, 0.99), percentile(err, m, 1.0), percentile(nerr, m, 0.99), percentile(nerr, m, 1.0), failures);
+    if (json)
+        fprintf(json,
+                "{\"suite\":\"ode\",\"case\":\"hull_depth\",\"variant\":\"penetrating\",\"backend\":\"%s\",\"n\":%d,"
+                "\"ns_per_query\":%.6g,\"rel_err_p50\":%.6g,\"rel_err_p99\":%.6g,\"rel_err_max\":%.6g,"
+                "\"normal_err_deg_p99\":%.6g,\"normal_err_deg_max\":%.6g,\"failures\":%d}\n",
+                name, m, best, percentile(err, m, 0.5), percentile(err, m, 0.99), percentile(err, m, 1.0),
+                percentile(nerr, m, 0.99), percentile(nerr, m, 1.0), failures);
+    for (k = 0; k < NHULLS; k++) dGeomDestroy(g[k]);
+    free(err);
+    free(nerr);
+    (void)nn;
+}
+
+static void run_hull_depth(int quick, FILE *json)
+{
+    int m = quick ? 300 : 3000;
+    depth_case *cases = xrealloc(NULL, (size_t)m * sizeof *cases);
+    make_depth_cases(cases, m);
+    printf("\nhull_depth penetrating: %d random poses of the hull scene's hulls, depth and normal of the deepest contact\n"
+           "against the exact (long double brute-force SAT) reference\n", m);
+    printf("  %-14s %9s %10s %10s %10s %10s %10s %8s\n", "backend", "ns/query", "err_p50", "err_p99", "err_max", "deg_p99",
+           "deg_max", "failures");
+    run_depth_backend("ode.dCollide", dCollide, cases, m, json);
+    free(cases);
+}
+
+#define MAXCASES 16
+
+static int make_cases(scene *out, int quick)
+{
+    static char variants[MAXCASES][32];
+    static const int speeds[] = {10, 30, 100, 300, 1000};
+    dSurfaceParameters stress_surf = surface(dContactBounce | dContactSoftCFM, dInfinity, 0.1, 0.1, 0.01);
+    dSurfaceParameters stack_surf = surface(dContactApprox1, 0.8, 0, 0, 0);
+    dSurfaceParameters wall_surf = surface(0, 0, 0, 0, 0);
+    int k = 0, i;
+
+    memset(out, 0, MAXCASES * sizeof *out);
+    out[k].name = "stress"; out[k].build = build_stress; out[k].n = quick ? 1000 : 10000;
+    out[k].steps = quick ? 20 : 100; out[k].dt = 0.05; out[k].iterations = 20; out[k].max_contacts = 4;
+    out[k].surface = stress_surf; out[k].ground = 1; out[k].drift = DRIFT_FROM_MID;
+    k++;
+    out[k].name = "tower"; out[k].build = build_tower; out[k].n = 10;
+    out[k].steps = quick ? 120 : 600; out[k].dt = 1.0 / 60; out[k].iterations = 20; out[k].max_contacts = 4;
+    out[k].surface = stack_surf; out[k].ground = 1; out[k].drift = DRIFT_FROM_START;
+    k++;
+    out[k].name = "pyramid"; out[k].build = build_pyramid; out[k].n = 20;
+    out[k].steps = quick ? 60 : 600; out[k].dt = 1.0 / 60; out[k].iterations = 20; out[k].max_contacts = 4;
+    out[k].surface = stack_surf; out[k].ground = 1; out[k].drift = DRIFT_FROM_START;
+    k++;
+    out[k].name = "hulls"; out[k].build = build_hulls; out[k].n = NHULLS;
+    out[k].steps = quick ? 120 : 600; out[k].dt = 1.0 / 60; out[k].iterations = 20; out[k].max_contacts = 4;
+    out[k].surface = stack_surf; out[k].ground = 1; out[k].drift = DRIFT_FROM_MID;
+    k++;
+    out[k].name = "mixed"; out[k].build = build_mixed; out[k].n = 80;
+    out[k].steps = quick ? 60 : 600; out[k].dt = 1.0 / 60; out[k].iterations = 20; out[k].max_contacts = 4;
+    out[k].surface = stack_surf; out[k].ground = 1; out[k].drift = DRIFT_FROM_MID;
+    k++;
+    for (i = 0; i < (int)(sizeof speeds / sizeof speeds[0]); i++) {
+        out[k].name = "wall"; out[k].build = build_wall; out[k].n = speeds[i];
+        out[k].steps = 100; out[k].dt = 0.01; out[k].iterations = 20; out[k].max_contacts = 4;
+        out[k].surface = wall_surf; out[k].wall_x = 0.1;
+        k++;
+    }
+    for (i = 0; i < k; i++) {
+        if (out[i].build == build_wall)
+            snprintf(variants[i], sizeof variants[i], "v=%d", out[i].n);
+        else
+            snprintf(variants[i], sizeof variants[i], "n=%d", out[i].n);
+        out[i].variant = variants[i];
+    }
+    return k;
+}
+
+int main(int argc, char **argv)
+{
+    scene cases[MAXCASES];
+    const char *json_path = NULL, *only = NULL;
+    FILE *json = NULL;
+    int quick = 0, ncases, i;
+
+    for (i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--quick"))
+            quick = 1;
+        else if (!strcmp(argv[i], "--json") && i + 1 < argc)
+            json_path = argv[++i];
+        else if (!strcmp(argv[i], "--scene") && i + 1 < argc)
+            only = argv[++i];
+        else {
+            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--scene stress|tower|pyramid|hulls|mixed|wall|hull_depth]\n", argv[0]);
+            return 2;
+        }
+    }
+    if (json_path && !(json = fopen(json_path, "w"))) {
+        perror(json_path);
+        return 2;
+    }
+    dInitODE2(0);
+    printf("ode_scenes: ODE %s scenes, native spaces and colliders against Minko's%s\n",
+           dCheckConfiguration("ODE_double_precision") ? "double" : "single", quick ? " (quick)" : "");
+    {
+        rng r = {0x5eed0006u};
+        for (i = 0; i < NHULLS; i++) hull_make(&hulls[i], &r);
+    }
+    ncases = make_cases(cases, quick);
+    for (i = 0; i < ncases; i++)
+        if (!only || !strcmp(only, cases[i].name)) run_case(&cases[i], json);
+    if (!only || !strcmp(only, "hull_depth")) run_hull_depth(quick, json);
+    for (i = 0; i < NHULLS; i++) hull_free(&hulls[i]);
+    mk_ode_close();
+    if (json) fclose(json);
+    return 0;
+}

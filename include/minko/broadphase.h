@@ -1,0 +1,153 @@
+/* minko/broadphase.h: which AABBs overlap, kept up to date frame after frame.
+ *
+ * Contract. A broadphase (mk_bp) owns a set of proxies: an AABB, a user
+ * pointer, two filter words and a static flag each, named by a
+ * generation-checked mk_bp_id (a destroyed proxy's id is refused, not reused
+ * by accident). Callers create, move and destroy proxies, then call
+ * mk_bp_update(), which makes the pair set exactly the set of proxy pairs
+ * whose closed AABBs overlap (touching boxes overlap), minus static-static
+ * pairs and pairs the filter rejects. After an update, mk_bp_pairs() gives the
+ * whole set sorted by (a, b) with a < b, and mk_bp_added()/mk_bp_removed()
+ * give the changes since the previous update, also sorted: replaying them on
+ * the previous set gives the new one. Three structures sit behind one API and
+ * give identical sets: brute force (the oracle), incremental sweep and prune,
+ * and a hierarchical hash grid; MK_BP_AUTO picks one from scene statistics and
+ * mk_bp_stats() says which. AABBs may have infinite sides (ground planes) but
+ * no NaN, no lo > hi, and no lo = +inf or hi = -inf. Memory comes only from
+ * the mk_allocator given at creation: the proxy capacity is fixed then, and
+ * the pair set and the grid's cell pool grow by doubling inside mk_bp_update()
+ * only when they overflow (never in a steady state; a fixed-size mode refuses
+ * with MK_ERR_CAPACITY instead). An update that fails leaves the broadphase
+ * valid: the next successful update rebuilds what was missed. Queries (region,
+ * ray, stats) never allocate and never change the broadphase, so several
+ * threads may query at once; no other call is thread-safe.
+ *
+ * Complexity, n proxies, d of them moving, p pairs, k changes per update:
+ *   brute force  update O(d n); queries O(n). Loses beyond a few hundred proxies.
+ *   SAP          update O(n + swaps + k) for coherent motion: each endpoint
+ *                moves past the endpoints between its old and new place. Loses
+ *                when many endpoints crowd one axis (large n, boxes lined up,
+ *                every box crossing thousands of others per frame) or motion
+ *                is incoherent; it then falls back to a full sort and a sweep
+ *                on the axis of largest spread, O(n log n + overlaps in 1-D).
+ *                Region query O(log n + proxies in the x slab).
+ *   hash grid    update O(d + candidates + cell changes): pairs are re-tested
+ *                only between proxies sharing a cell, cells are revisited only
+ *                when a proxy's cell range changes. Memory O(n) cells, not
+ *                world volume. Loses when sizes spread over many octaves (a
+ *                proxy is also filed in coarser occupied levels) and when one
+ *                cell holds many proxies (tests grow with its square).
+ *                Oversized/infinite proxies are tested against every proxy.
+ *                Region query O(cells in the box's range).
+ */
+#ifndef MINKO_BROADPHASE_H
+#define MINKO_BROADPHASE_H
+
+#include "minko/math3d.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* (slot << 8) | generation, generation in 1..255; 0 is never a live id.
+ * Ordering ids orders proxies by slot, so sorted pair sets are deterministic. */
+typedef uint32_t mk_bp_id;
+#define MK_BP_NULL_ID 0u
+/* Most proxies one broadphase can hold (slot numbers fit in 24 bits). */
+#define MK_BP_MAX_PROXIES (1 << 24)
+
+typedef enum mk_bp_kind {
+    MK_BP_AUTO = 0, /* choose from scene statistics; re-evaluated as the scene changes */
+    MK_BP_BRUTE,    /* O(n^2) reference */
+    MK_BP_SAP,      /* incremental sweep and prune */
+    MK_BP_HGRID,    /* hierarchical hash grid */
+    MK_BP_KIND_COUNT
+} mk_bp_kind;
+
+/* Built-in filters on the two words of each proxy (cat = what I am, mask =
+ * what I collide with). A pair filter callback, if set, runs after them. */
+typedef enum mk_bp_filter_mode {
+    MK_BP_FILTER_NONE = 0, /* every pair passes */
+    MK_BP_FILTER_AND,      /* Bullet: (cat_a & mask_b) && (cat_b & mask_a) */
+    MK_BP_FILTER_OR        /* ODE:    (cat_a & mask_b) || (cat_b & mask_a) */
+} mk_bp_filter_mode;
+
+/* Return nonzero to keep the pair. Called when a pair starts to overlap (not
+ * every frame), from inside mk_bp_update(); it must not call back into bp. */
+typedef int (*mk_bp_pair_filter)(void *ctx, mk_bp_id a, void *user_a, mk_bp_id b, void *user_b);
+
+typedef struct mk_bp_def {
+    mk_bp_kind kind;              /* default MK_BP_AUTO */
+    int proxy_capacity;           /* most live proxies, 1..MK_BP_MAX_PROXIES; default 1024 */
+    int pair_capacity;            /* initial pair capacity; 0 = 2 * proxy_capacity */
+    int fixed_capacity;           /* nonzero: never grow; overflow returns MK_ERR_CAPACITY */
+    mk_bp_filter_mode filter_mode;/* default MK_BP_FILTER_NONE */
+    mk_bp_pair_filter filter;     /* optional */
+    void *filter_ctx;
+} mk_bp_def;
+
+typedef struct mk_bp_pair { mk_bp_id a, b; } mk_bp_pair; /* a < b */
+
+typedef struct mk_bp_stats {
+    mk_bp_kind kind;        /* the structure in use (never MK_BP_AUTO) */
+    mk_bp_kind requested;   /* what the def asked for */
+    int proxies, static_proxies, pairs;
+    int added, removed;     /* events of the last update */
+    long long swaps;        /* SAP: endpoint swaps in the last update */
+    int full_rebuilds;      /* SAP: full sorts so far; any kind: rebuilds after a switch or failure */
+    int switches;           /* AUTO: changes of structure so far */
+    int levels;             /* grid: occupied levels */
+    int cells;              /* grid: occupied cells */
+    size_t bytes;           /* memory held, all blocks */
+} mk_bp_stats;
+
+typedef struct mk_bp mk_bp;
+
+MK_API mk_bp_def mk_bp_default_def(void);
+/* def may be NULL (defaults); alloc may be NULL (malloc/free). */
+MK_API mk_status mk_bp_create(const mk_bp_def *def, const mk_allocator *alloc, mk_bp **out);
+MK_API void mk_bp_destroy(mk_bp *bp);
+
+/* A static proxy never pairs with another static proxy and costs nothing per
+ * update unless it is moved. The new proxy's pairs appear at the next update. */
+MK_API mk_status mk_bp_create_proxy(mk_bp *bp, mk_aabb box, void *user, uint64_t cat, uint64_t mask,
+                                    int is_static, mk_bp_id *out);
+/* Its pairs disappear at the next update (reported in mk_bp_removed()). */
+MK_API mk_status mk_bp_destroy_proxy(mk_bp *bp, mk_bp_id id);
+/* New AABB; O(1), the structure catches up in mk_bp_update(). */
+MK_API mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box);
+/* New filter words: the proxy's pairs are re-filtered at the next update. */
+MK_API mk_status mk_bp_set_filter(mk_bp *bp, mk_bp_id id, uint64_t cat, uint64_t mask);
+MK_API mk_status mk_bp_get_proxy(const mk_bp *bp, mk_bp_id id, mk_aabb *box, void **user);
+/* The user pointer of a live id, NULL otherwise (fast path for pair loops). */
+MK_API void *mk_bp_user(const mk_bp *bp, mk_bp_id id);
+
+/* Brings the pair set and the events up to date. */
+MK_API mk_status mk_bp_update(mk_bp *bp);
+/* Views valid until the next mutating call; counts via *count. */
+MK_API const mk_bp_pair *mk_bp_pairs(const mk_bp *bp, int *count);
+MK_API const mk_bp_pair *mk_bp_added(const mk_bp *bp, int *count);
+MK_API const mk_bp_pair *mk_bp_removed(const mk_bp *bp, int *count);
+
+/* Calls fn for every proxy whose AABB overlaps box (closed), as of the last
+ * mk_bp_update() for SAP and grid, each once, in no set order. fn returns 0
+ * to stop early. */
+typedef int (*mk_bp_query_fn)(void *ctx, mk_bp_id id, void *user);
+MK_API mk_status mk_bp_query_aabb(const mk_bp *bp, mk_aabb box, mk_bp_query_fn fn, void *ctx);
+
+/* Segment from `from` to `to` sweeping the box [box_lo, box_hi] (zero for a
+ * thin ray; box_lo <= 0 <= box_hi): fn gets every proxy whose AABB the swept
+ * box touches, with t in [0, max] the entry fraction along the segment, and
+ * returns the new max fraction (return max to go on, t to clip, < 0 to stop). */
+typedef struct mk_bp_ray { mk_vec3 from, to, box_lo, box_hi; } mk_bp_ray;
+typedef mk_real (*mk_bp_ray_fn)(void *ctx, mk_bp_id id, void *user, mk_real t, mk_real max);
+MK_API mk_status mk_bp_raycast(const mk_bp *bp, const mk_bp_ray *ray, mk_bp_ray_fn fn, void *ctx);
+
+MK_API mk_status mk_bp_get_stats(const mk_bp *bp, mk_bp_stats *out);
+MK_API const char *mk_bp_kind_name(mk_bp_kind kind);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

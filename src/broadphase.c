@@ -1,0 +1,517 @@
+/* broadphase.c: the common API in front of brute force, SAP and the grid:
+ * proxies and their ids, input checks, the update driver, AUTO's choice,
+ * queries and ray casts. See minko/broadphase.h for the contract. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "broadphase_internal.h"
+
+/* ---- memory ---- */
+
+void *mk_bp_alloc_(mk_bp *bp, size_t size)
+{
+    void *p = bp->alloc.alloc ? bp->alloc.alloc(bp->alloc.ctx, size, 16) : malloc(size);
+    if (p) bp->bytes += size;
+    return p;
+}
+
+void mk_bp_free_(mk_bp *bp, void *p, size_t size)
+{
+    if (!p) return;
+    bp->bytes -= size;
+    if (bp->alloc.free) bp->alloc.free(bp->alloc.ctx, p, size);
+    else free(p);
+}
+
+mk_status mk_bp_grow_(mk_bp *bp, void **p, size_t elem, size_t old_n, size_t new_n)
+{
+    void *q = mk_bp_alloc_(bp, elem * new_n);
+    if (!q) return MK_ERR_OUT_OF_MEMORY;
+    if (*p) {
+        memcpy(q, *p, elem * old_n);
+        mk_bp_free_(bp, *p, elem * old_n);
+    }
+    *p = q;
+    return MK_OK;
+}
+
+/* ---- creation ---- */
+
+mk_bp_def mk_bp_default_def(void)
+{
+    mk_bp_def d;
+    memset(&d, 0, sizeof d);
+    d.kind = MK_BP_AUTO;
+    d.proxy_capacity = 1024;
+    d.filter_mode = MK_BP_FILTER_NONE;
+    return d;
+}
+
+const char *mk_bp_kind_name(mk_bp_kind kind)
+{
+    switch (kind) {
+    case MK_BP_AUTO: return "auto";
+    case MK_BP_BRUTE: return "brute";
+    case MK_BP_SAP: return "sap";
+    case MK_BP_HGRID: return "hgrid";
+    default: return "unknown";
+    }
+}
+
+static int kind_available(mk_bp_kind k)
+{
+#if defined(MK_WITHOUT_SAP)
+    if (k == MK_BP_SAP) return 0;
+#endif
+#if defined(MK_WITHOUT_HGRID)
+    if (k == MK_BP_HGRID) return 0;
+#endif
+    return k >= MK_BP_AUTO && k < MK_BP_KIND_COUNT;
+}
+
+/* Per-proxy arrays, listed once so create and destroy agree. */
+typedef struct proxy_array_ { void **p; size_t elem; } proxy_array_;
+static int proxy_arrays(mk_bp *bp, proxy_array_ *a)
+{
+    int n = 0;
+    a[n].p = (void **)&bp->box; a[n++].elem = sizeof *bp->box;
+    a[n].p = (void **)&bp->next; a[n++].elem = sizeof *bp->next;
+    a[n].p = (void **)&bp->user; a[n++].elem = sizeof *bp->user;
+    a[n].p = (void **)&bp->cat; a[n++].elem = sizeof *bp->cat;
+    a[n].p = (void **)&bp->mask; a[n++].elem = sizeof *bp->mask;
+    a[n].p = (void **)&bp->gen; a[n++].elem = sizeof *bp->gen;
+    a[n].p = (void **)&bp->flags; a[n++].elem = sizeof *bp->flags;
+    a[n].p = (void **)&bp->free_slots; a[n++].elem = sizeof *bp->free_slots;
+    a[n].p = (void **)&bp->dirty; a[n++].elem = sizeof *bp->dirty;
+    return n;
+}
+
+static void destroy_structures(mk_bp *bp)
+{
+#if !defined(MK_WITHOUT_SAP)
+    mk_sap_destroy_(bp);
+#endif
+#if !defined(MK_WITHOUT_HGRID)
+    mk_hgrid_destroy_(bp);
+#endif
+}
+
+void mk_bp_destroy(mk_bp *bp)
+{
+    proxy_array_ a[9];
+    int n, i;
+    mk_allocator al;
+    if (!bp) return;
+    destroy_structures(bp);
+    mk_pairs_fini_(bp);
+    n = proxy_arrays(bp, a);
+    for (i = 0; i < n; ++i) mk_bp_free_(bp, *a[i].p, a[i].elem * (size_t)bp->cap);
+    al = bp->alloc;
+    if (al.free) al.free(al.ctx, bp, sizeof *bp);
+    else free(bp);
+}
+
+static mk_status check_def(const mk_bp_def *d)
+{
+    if (!kind_available(d->kind)) return d->kind >= 0 && d->kind < MK_BP_KIND_COUNT ? MK_ERR_UNSUPPORTED : MK_ERR_BAD_ARGUMENT;
+    if (d->proxy_capacity < 1 || d->proxy_capacity > MK_BP_MAX_PROXIES) return MK_ERR_BAD_SIZE;
+    if (d->pair_capacity < 0 || d->pair_capacity > INT32_MAX / 4) return MK_ERR_BAD_SIZE;
+    if (d->filter_mode < MK_BP_FILTER_NONE || d->filter_mode > MK_BP_FILTER_OR) return MK_ERR_BAD_ARGUMENT;
+    return MK_OK;
+}
+
+mk_status mk_bp_create(const mk_bp_def *def, const mk_allocator *alloc, mk_bp **out)
+{
+    mk_bp_def d = def ? *def : mk_bp_default_def();
+    mk_bp *bp;
+    proxy_array_ a[9];
+    int n, i, pair_cap;
+    mk_status st;
+    if (!out) return MK_ERR_NULL;
+    *out = NULL;
+    if (alloc && (!alloc->alloc || !alloc->free)) return MK_ERR_NULL;
+    if ((st = check_def(&d)) != MK_OK) return st;
+    bp = alloc ? (mk_bp *)alloc->alloc(alloc->ctx, sizeof *bp, 16) : (mk_bp *)malloc(sizeof *bp);
+    if (!bp) return MK_ERR_OUT_OF_MEMORY;
+    memset(bp, 0, sizeof *bp);
+    if (alloc) bp->alloc = *alloc;
+    bp->def = d;
+    bp->cap = d.proxy_capacity;
+    bp->kind = d.kind == MK_BP_AUTO ? MK_BP_SAP : d.kind;
+    if (!kind_available(bp->kind)) bp->kind = kind_available(MK_BP_HGRID) ? MK_BP_HGRID : MK_BP_BRUTE;
+    n = proxy_arrays(bp, a);
+    for (i = 0; i < n; ++i)
+        if (!(*a[i].p = mk_bp_alloc_(bp, a[i].elem * (size_t)bp->cap))) { mk_bp_destroy(bp); return MK_ERR_OUT_OF_MEMORY; }
+    memset(bp->flags, 0, (size_t)bp->cap);
+    memset(bp->gen, 0, (size_t)bp->cap);
+    pair_cap = d.pair_capacity ? d.pair_capacity : (bp->cap > INT32_MAX / 4 ? INT32_MAX / 4 : 2 * bp->cap);
+    if ((st = mk_pairs_init_(bp, pair_cap)) != MK_OK) { mk_bp_destroy(bp); return st; }
+    bp->rebuild = 1;
+    *out = bp;
+    return MK_OK;
+}
+
+/* ---- proxies ---- */
+
+/* No NaN, lo <= hi, and no side that is infinite the wrong way (an AABB
+ * starting at +inf or ending at -inf is empty, not a plane). */
+static mk_status check_box(mk_aabb b)
+{
+    const mk_real *lo = &b.lo.x, *hi = &b.hi.x;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        if (lo[k] != lo[k] || hi[k] != hi[k]) return MK_ERR_BAD_AABB;
+        if (!(lo[k] <= hi[k]) || !(lo[k] <= MK_REAL_MAX) || !(hi[k] >= -MK_REAL_MAX)) return MK_ERR_BAD_AABB;
+    }
+    return MK_OK;
+}
+
+/* The slot of a live, not destroyed id, or -1. */
+static int slot_of(const mk_bp *bp, mk_bp_id id)
+{
+    uint32_t slot = id >> 8;
+    if (!bp || slot >= (uint32_t)bp->hi_slot) return -1;
+    if ((bp->flags[slot] & (MK_PF_ALIVE | MK_PF_DYING)) != MK_PF_ALIVE) return -1;
+    if (bp->gen[slot] != (id & 0xff)) return -1;
+    return (int)slot;
+}
+
+static void mark_dirty(mk_bp *bp, uint32_t slot, uint8_t flag)
+{
+    if (!(bp->flags[slot] & MK_PF_DIRTY)) {
+        bp->flags[slot] |= MK_PF_DIRTY;
+        bp->dirty[bp->dirty_count++] = slot;
+    }
+    bp->flags[slot] |= flag;
+}
+
+mk_status mk_bp_create_proxy(mk_bp *bp, mk_aabb box, void *user, uint64_t cat, uint64_t mask, int is_static, mk_bp_id *out)
+{
+    uint32_t slot;
+    mk_status st;
+    if (!bp || !out) return MK_ERR_NULL;
+    *out = MK_BP_NULL_ID;
+    if ((st = check_box(box)) != MK_OK) return st;
+    /* Slots of proxies destroyed since the last update are freed by it; until
+     * then they still count against the capacity. */
+    if (bp->free_count > 0) slot = bp->free_slots[--bp->free_count];
+    else if (bp->hi_slot < bp->cap) slot = (uint32_t)bp->hi_slot++;
+    else return MK_ERR_CAPACITY;
+    if (bp->gen[slot] == 0) bp->gen[slot] = 1;
+    bp->flags[slot] = MK_PF_ALIVE | (is_static ? MK_PF_STATIC : 0);
+    bp->box[slot] = box;
+    bp->next[slot] = box;
+    bp->user[slot] = user;
+    bp->cat[slot] = cat;
+    bp->mask[slot] = mask;
+    mark_dirty(bp, slot, MK_PF_NEW);
+    bp->live++;
+    if (is_static) bp->statics++;
+    *out = mk_bp_id_of_(bp, slot);
+    return MK_OK;
+}
+
+mk_status mk_bp_destroy_proxy(mk_bp *bp, mk_bp_id id)
+{
+    int s;
+    if (!bp) return MK_ERR_NULL;
+    if ((s = slot_of(bp, id)) < 0) return MK_ERR_UNKNOWN_ID;
+    mark_dirty(bp, (uint32_t)s, MK_PF_DYING);
+    bp->live--;
+    if (bp->flags[s] & MK_PF_STATIC) bp->statics--;
+    return MK_OK;
+}
+
+mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box)
+{
+    int s;
+    mk_status st;
+    if (!bp) return MK_ERR_NULL;
+    if ((s = slot_of(bp, id)) < 0) return MK_ERR_UNKNOWN_ID;
+    if ((st = check_box(box)) != MK_OK) return st;
+    bp->next[s] = box;
+    if (bp->flags[s] & MK_PF_NEW) bp->box[s] = box;
+    else mark_dirty(bp, (uint32_t)s, MK_PF_MOVED);
+    return MK_OK;
+}
+
+mk_status mk_bp_set_filter(mk_bp *bp, mk_bp_id id, uint64_t cat, uint64_t mask)
+{
+    int s;
+    if (!bp) return MK_ERR_NULL;
+    if ((s = slot_of(bp, id)) < 0) return MK_ERR_UNKNOWN_ID;
+    bp->cat[s] = cat;
+    bp->mask[s] = mask;
+    mark_dirty(bp, (uint32_t)s, MK_PF_REFILTER);
+    return MK_OK;
+}
+
+mk_status mk_bp_get_proxy(const mk_bp *bp, mk_bp_id id, mk_aabb *box, void **user)
+{
+    int s;
+    if (!bp) return MK_ERR_NULL;
+    if ((s = slot_of(bp, id)) < 0) return MK_ERR_UNKNOWN_ID;
+    if (box) *box = bp->next[s];
+    if (user) *user = bp->user[s];
+    return MK_OK;
+}
+
+void *mk_bp_user(const mk_bp *bp, mk_bp_id id)
+{
+    int s = slot_of(bp, id);
+    return s < 0 ? NULL : bp->user[s];
+}
+
+int mk_bp_filter_pass_(const mk_bp *bp, uint32_t a, uint32_t b)
+{
+    uint64_t ab = bp->cat[a] & bp->mask[b], ba = bp->cat[b] & bp->mask[a];
+    if (bp->def.filter_mode == MK_BP_FILTER_AND && !(ab && ba)) return 0;
+    if (bp->def.filter_mode == MK_BP_FILTER_OR && !(ab || ba)) return 0;
+    if (bp->def.filter)
+        return bp->def.filter(bp->def.filter_ctx, mk_bp_id_of_(bp, a), bp->user[a], mk_bp_id_of_(bp, b), bp->user[b]) != 0;
+    return 1;
+}
+
+void mk_bp_commit_(mk_bp *bp)
+{
+    int i;
+    for (i = 0; i < bp->dirty_count; ++i) {
+        uint32_t s = bp->dirty[i];
+        bp->box[s] = bp->next[s];
+    }
+}
+
+/* ---- AUTO ---- */
+
+/* Motion statistics from the dirty list, smoothed over frames: the share of
+ * proxies that moved, and the share that moved farther than their own size
+ * (teleports, which break the insertion sort's coherence). */
+static void observe_motion(mk_bp *bp)
+{
+    int i, moved = 0, far = 0;
+    double n = bp->live > 0 ? (double)bp->live : 1.0;
+    for (i = 0; i < bp->dirty_count; ++i) {
+        uint32_t s = bp->dirty[i];
+        mk_vec3 d, e;
+        if ((bp->flags[s] & (MK_PF_MOVED | MK_PF_NEW | MK_PF_DYING)) == 0) continue;
+        ++moved;
+        if (bp->flags[s] & (MK_PF_NEW | MK_PF_DYING)) continue; /* churn, not incoherence */
+        d = mk_v3_abs(mk_v3_sub(mk_aabb_center(bp->next[s]), mk_aabb_center(bp->box[s])));
+        e = mk_v3_sub(bp->box[s].hi, bp->box[s].lo);
+        if (d.x > e.x || d.y > e.y || d.z > e.z) ++far;
+    }
+    bp->moved_share = 0.75 * bp->moved_share + 0.25 * (moved / n);
+    bp->far_share = 0.75 * bp->far_share + 0.25 * (far / n);
+}
+
+/* SAP's insertion sort pays per endpoint crossed: it wins on small, coherent
+ * scenes; the grid's cost does not grow with crowding along an axis or with
+ * incoherent motion. Thresholds are measured by demos/bench_broadphase. */
+static mk_bp_kind auto_choice(const mk_bp *bp)
+{
+    int dynamic = bp->live - bp->statics;
+    if (!kind_available(MK_BP_SAP)) return kind_available(MK_BP_HGRID) ? MK_BP_HGRID : MK_BP_BRUTE;
+    if (!kind_available(MK_BP_HGRID)) return MK_BP_SAP;
+    if (dynamic <= 256 && bp->far_share < 0.02) return MK_BP_SAP;
+    return MK_BP_HGRID;
+}
+
+static void auto_choose(mk_bp *bp)
+{
+    mk_bp_kind want;
+    if (bp->def.kind != MK_BP_AUTO) return;
+    observe_motion(bp);
+    /* Decide on the first frame, then every 32 frames: a switch costs a rebuild. */
+    if (bp->frames_since_choice++ % 32 != 0) return;
+    want = auto_choice(bp);
+    if (want == bp->kind) return;
+    destroy_structures(bp);
+    bp->kind = want;
+    bp->rebuild = 1;
+    bp->switches++;
+}
+
+/* ---- update ---- */
+
+static mk_status run_structure(mk_bp *bp)
+{
+    switch (bp->kind) {
+#if !defined(MK_WITHOUT_SAP)
+    case MK_BP_SAP: return mk_sap_update_(bp);
+#endif
+#if !defined(MK_WITHOUT_HGRID)
+    case MK_BP_HGRID: return mk_hgrid_update_(bp);
+#endif
+    default: return mk_brute_update_(bp);
+    }
+}
+
+static void retire_dirty(mk_bp *bp)
+{
+    int i;
+    for (i = 0; i < bp->dirty_count; ++i) {
+        uint32_t s = bp->dirty[i];
+        if (bp->flags[s] & MK_PF_DYING) {
+            bp->flags[s] = 0;
+            bp->gen[s] = (uint8_t)(bp->gen[s] == 255 ? 1 : bp->gen[s] + 1);
+            bp->free_slots[bp->free_count++] = s;
+        } else {
+            bp->flags[s] &= (uint8_t)(MK_PF_ALIVE | MK_PF_STATIC);
+        }
+    }
+    bp->dirty_count = 0;
+}
+
+mk_status mk_bp_update(mk_bp *bp)
+{
+    mk_status st;
+    if (!bp) return MK_ERR_NULL;
+    auto_choose(bp);
+    if (bp->rebuild) bp->full_rebuilds++;
+    st = run_structure(bp);
+    if (st != MK_OK) {
+        /* Whatever was missed is recounted next time; the pairs of destroyed
+         * proxies go now, since their slots are about to be reused. */
+        mk_pairs_drop_flagged_(bp, MK_PF_DYING);
+        bp->rebuild = 1;
+    }
+    mk_pairs_finish_(bp);
+    retire_dirty(bp);
+    return st;
+}
+
+const mk_bp_pair *mk_bp_pairs(const mk_bp *bp, int *count)
+{
+    if (count) *count = bp ? bp->pairs.set_count : 0;
+    return bp ? bp->pairs.set : NULL;
+}
+
+const mk_bp_pair *mk_bp_added(const mk_bp *bp, int *count)
+{
+    if (count) *count = bp ? bp->pairs.added_count : 0;
+    return bp ? bp->pairs.added : NULL;
+}
+
+const mk_bp_pair *mk_bp_removed(const mk_bp *bp, int *count)
+{
+    if (count) *count = bp ? bp->pairs.removed_count : 0;
+    return bp ? bp->pairs.removed : NULL;
+}
+
+/* ---- queries ---- */
+
+typedef struct query_ctx_ { const mk_bp *bp; mk_bp_query_fn fn; void *ctx; } query_ctx_;
+
+/* Proxies destroyed since the last update are still in the structures: hide them. */
+static int skip_dying(void *c, mk_bp_id id, void *user)
+{
+    query_ctx_ *q = (query_ctx_ *)c;
+    if (q->bp->flags[id >> 8] & MK_PF_DYING) return 1;
+    return q->fn(q->ctx, id, user);
+}
+
+static void brute_query(const mk_bp *bp, mk_aabb box, mk_bp_query_fn fn, void *ctx)
+{
+    int s;
+    for (s = 0; s < bp->hi_slot; ++s) {
+        if ((bp->flags[s] & (MK_PF_ALIVE | MK_PF_NEW)) != MK_PF_ALIVE) continue;
+        if (mk_bp_overlap_(&bp->box[s], &box) && !fn(ctx, mk_bp_id_of_(bp, (uint32_t)s), bp->user[s])) return;
+    }
+}
+
+static void query(const mk_bp *bp, mk_aabb box, mk_bp_query_fn fn, void *ctx)
+{
+    query_ctx_ q;
+    q.bp = bp; q.fn = fn; q.ctx = ctx;
+    if (bp->rebuild || bp->kind == MK_BP_BRUTE) { brute_query(bp, box, skip_dying, &q); return; }
+#if !defined(MK_WITHOUT_SAP)
+    if (bp->kind == MK_BP_SAP) { mk_sap_query_(bp, box, skip_dying, &q); return; }
+#endif
+#if !defined(MK_WITHOUT_HGRID)
+    if (bp->kind == MK_BP_HGRID) { mk_hgrid_query_(bp, box, skip_dying, &q); return; }
+#endif
+}
+
+mk_status mk_bp_query_aabb(const mk_bp *bp, mk_aabb box, mk_bp_query_fn fn, void *ctx)
+{
+    mk_status st;
+    if (!bp || !fn) return MK_ERR_NULL;
+    if ((st = check_box(box)) != MK_OK) return st;
+    query(bp, box, fn, ctx);
+    return MK_OK;
+}
+
+typedef struct ray_ctx_ {
+    const mk_bp *bp;
+    mk_bp_ray ray;
+    mk_vec3 d;
+    mk_real max;
+    mk_bp_ray_fn fn;
+    void *ctx;
+} ray_ctx_;
+
+/* Entry fraction of the segment into [lo, hi] on one axis, clipping [*t0, *t1]. */
+static int slab(mk_real from, mk_real d, mk_real lo, mk_real hi, mk_real *t0, mk_real *t1)
+{
+    mk_real a, b;
+    if (d == 0) return from >= lo && from <= hi;
+    a = (lo - from) / d;
+    b = (hi - from) / d;
+    if (a > b) { mk_real t = a; a = b; b = t; }
+    if (a > *t0) *t0 = a;
+    if (b < *t1) *t1 = b;
+    return *t0 <= *t1;
+}
+
+static int ray_visit(void *c, mk_bp_id id, void *user)
+{
+    ray_ctx_ *r = (ray_ctx_ *)c;
+    const mk_aabb *b = &r->bp->box[id >> 8];
+    mk_real t0 = 0, t1 = r->max;
+    /* The swept box [box_lo, box_hi] touches b iff the segment touches b grown by it. */
+    if (!slab(r->ray.from.x, r->d.x, b->lo.x - r->ray.box_hi.x, b->hi.x - r->ray.box_lo.x, &t0, &t1)) return 1;
+    if (!slab(r->ray.from.y, r->d.y, b->lo.y - r->ray.box_hi.y, b->hi.y - r->ray.box_lo.y, &t0, &t1)) return 1;
+    if (!slab(r->ray.from.z, r->d.z, b->lo.z - r->ray.box_hi.z, b->hi.z - r->ray.box_lo.z, &t0, &t1)) return 1;
+    r->max = r->fn(r->ctx, id, user, t0, r->max);
+    return r->max >= 0;
+}
+
+mk_status mk_bp_raycast(const mk_bp *bp, const mk_bp_ray *ray, mk_bp_ray_fn fn, void *ctx)
+{
+    ray_ctx_ r;
+    mk_aabb sweep;
+    if (!bp || !ray || !fn) return MK_ERR_NULL;
+    if (!mk_v3_is_valid(ray->from) || !mk_v3_is_valid(ray->to) || !mk_v3_is_valid(ray->box_lo) || !mk_v3_is_valid(ray->box_hi))
+        return MK_ERR_NOT_FINITE;
+    if (ray->box_lo.x > 0 || ray->box_lo.y > 0 || ray->box_lo.z > 0 || ray->box_hi.x < 0 || ray->box_hi.y < 0 || ray->box_hi.z < 0)
+        return MK_ERR_BAD_AABB;
+    r.bp = bp; r.ray = *ray; r.fn = fn; r.ctx = ctx; r.max = 1;
+    r.d = mk_v3_sub(ray->to, ray->from);
+    sweep = mk_aabb_make(mk_v3_add(mk_v3_min(ray->from, ray->to), ray->box_lo), mk_v3_add(mk_v3_max(ray->from, ray->to), ray->box_hi));
+    if (!mk_v3_is_valid(sweep.lo) || !mk_v3_is_valid(sweep.hi)) return MK_ERR_NOT_FINITE;
+    query(bp, sweep, ray_visit, &r);
+    return MK_OK;
+}
+
+mk_status mk_bp_get_stats(const mk_bp *bp, mk_bp_stats *out)
+{
+    if (!bp || !out) return MK_ERR_NULL;
+    memset(out, 0, sizeof *out);
+    out->kind = bp->kind;
+    out->requested = bp->def.kind;
+    out->proxies = bp->live;
+    out->static_proxies = bp->statics;
+    out->pairs = bp->pairs.set_count;
+    out->added = bp->pairs.added_count;
+    out->removed = bp->pairs.removed_count;
+    out->full_rebuilds = bp->full_rebuilds;
+    out->switches = bp->switches;
+    out->bytes = bp->bytes + sizeof *bp;
+#if !defined(MK_WITHOUT_SAP)
+    if (bp->kind == MK_BP_SAP) out->swaps = mk_sap_swaps_(bp);
+#endif
+#if !defined(MK_WITHOUT_HGRID)
+    if (bp->kind == MK_BP_HGRID) mk_hgrid_counts_(bp, &out->levels, &out->cells);
+#endif
+    return MK_OK;
+}
