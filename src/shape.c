@@ -129,53 +129,10 @@ int mk_core_is_polytope(const mk_shape *s)
     return s->type == MK_SHAPE_SPHERE || s->type == MK_SHAPE_BOX || s->type == MK_SHAPE_CAPSULE || s->type == MK_SHAPE_HULL;
 }
 
-static mk_real sgn_extent(mk_real d, mk_real h) { return d >= 0 ? h : -h; }
-
 mk_vec3 mk_core_support(const mk_shape *s, mk_vec3 d, int *feature)
 {
-    int f = -1;
-    mk_vec3 p;
-    switch (s->type) {
-    case MK_SHAPE_SPHERE:
-        f = 0;
-        p = mk_v3_zero();
-        break;
-    case MK_SHAPE_BOX: {
-        mk_vec3 h = s->u.half_extents;
-        f = (d.x >= 0 ? 1 : 0) | (d.y >= 0 ? 2 : 0) | (d.z >= 0 ? 4 : 0);
-        p = mk_v3(sgn_extent(d.x, h.x), sgn_extent(d.y, h.y), sgn_extent(d.z, h.z));
-        break;
-    }
-    case MK_SHAPE_CAPSULE:
-        f = d.z >= 0 ? 1 : 0;
-        p = mk_v3(0, 0, sgn_extent(d.z, s->u.capsule.half_height));
-        break;
-    case MK_SHAPE_CYLINDER: {
-        mk_real sigma = mk_sqrt_(d.x * d.x + d.y * d.y), r = s->u.cylinder.radius;
-        mk_real z = sgn_extent(d.z, s->u.cylinder.half_height);
-        p = sigma > 0 ? mk_v3(r * d.x / sigma, r * d.y / sigma, z) : mk_v3(0, 0, z);
-        break;
-    }
-    case MK_SHAPE_CONE: {
-        mk_real sigma = mk_sqrt_(d.x * d.x + d.y * d.y), r = s->u.cone.radius, h = s->u.cone.half_height;
-        /* Apex value d.z*h against the best base-rim value r*sigma - d.z*h. */
-        if (d.z * h >= r * sigma - d.z * h) {
-            f = 0;
-            p = mk_v3(0, 0, h);
-        } else {
-            p = sigma > 0 ? mk_v3(r * d.x / sigma, r * d.y / sigma, -h) : mk_v3(0, 0, -h);
-        }
-        break;
-    }
-    case MK_SHAPE_HULL:
-        f = mk_hull_support_index(s->u.hull, d, feature ? *feature : -1);
-        p = s->u.hull->vertices[f];
-        break;
-    case MK_SHAPE_PLANE:
-    default:
-        p = mk_v3(MK_REAL_MAX, MK_REAL_MAX, MK_REAL_MAX);
-        break;
-    }
+    int f = feature ? *feature : -1;
+    mk_vec3 p = mk_core_support_inl(s, d, &f);
     if (feature) *feature = f;
     return p;
 }

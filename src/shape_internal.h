@@ -21,6 +21,87 @@
  * features. `feature` may be NULL. */
 mk_vec3 mk_core_support(const mk_shape *s, mk_vec3 dir, int *feature);
 
+/* For the few helpers of the narrowphase loops that must be inlined even
+ * where the compiler's size heuristics would call them (a support is ~10
+ * flops; a call and a spilled struct return cost as much again). */
+#if defined(__GNUC__) || defined(__clang__)
+#  define MK_ALWAYS_INLINE static inline __attribute__((always_inline))
+#else
+#  define MK_ALWAYS_INLINE static inline
+#endif
+
+static inline mk_real mk_sgn_extent_(mk_real d, mk_real h) { return d >= 0 ? h : -h; }
+
+/* The body of mk_core_support, inline so the GJK/EPA loops pay no call and
+ * the type switch is a well-predicted branch. *feature must be valid (in/out). */
+MK_ALWAYS_INLINE mk_vec3 mk_core_support_inl(const mk_shape *s, mk_vec3 d, int *feature)
+{
+    switch (s->type) {
+    case MK_SHAPE_SPHERE:
+        *feature = 0;
+        return mk_v3_zero();
+    case MK_SHAPE_BOX: {
+        mk_vec3 h = s->u.half_extents;
+        *feature = (d.x >= 0 ? 1 : 0) | (d.y >= 0 ? 2 : 0) | (d.z >= 0 ? 4 : 0);
+        return mk_v3(mk_sgn_extent_(d.x, h.x), mk_sgn_extent_(d.y, h.y), mk_sgn_extent_(d.z, h.z));
+    }
+    case MK_SHAPE_CAPSULE:
+        *feature = d.z >= 0 ? 1 : 0;
+        return mk_v3(0, 0, mk_sgn_extent_(d.z, s->u.capsule.half_height));
+    case MK_SHAPE_CYLINDER: {
+        mk_real sigma = mk_sqrt_(d.x * d.x + d.y * d.y), r = s->u.cylinder.radius;
+        mk_real z = mk_sgn_extent_(d.z, s->u.cylinder.half_height);
+        *feature = -1;
+        return sigma > 0 ? mk_v3(r * d.x / sigma, r * d.y / sigma, z) : mk_v3(0, 0, z);
+    }
+    case MK_SHAPE_CONE: {
+        mk_real sigma = mk_sqrt_(d.x * d.x + d.y * d.y), r = s->u.cone.radius, h = s->u.cone.half_height;
+        /* Apex value d.z*h against the best base-rim value r*sigma - d.z*h. */
+        if (d.z * h >= r * sigma - d.z * h) {
+            *feature = 0;
+            return mk_v3(0, 0, h);
+        }
+        *feature = -1;
+        return sigma > 0 ? mk_v3(r * d.x / sigma, r * d.y / sigma, -h) : mk_v3(0, 0, -h);
+    }
+    case MK_SHAPE_HULL:
+        *feature = mk_hull_support_index(s->u.hull, d, *feature);
+        return s->u.hull->vertices[*feature];
+    case MK_SHAPE_PLANE:
+    default:
+        *feature = -1;
+        return mk_v3(MK_REAL_MAX, MK_REAL_MAX, MK_REAL_MAX);
+    }
+}
+
+/* Number of vertices mk_core_support can name for a polytope core (sphere 1,
+ * capsule 2, box 8, hull V); 0 for the other shapes. */
+static inline int mk_core_vertex_count(const mk_shape *s)
+{
+    switch (s->type) {
+    case MK_SHAPE_SPHERE: return 1;
+    case MK_SHAPE_CAPSULE: return 2;
+    case MK_SHAPE_BOX: return 8;
+    case MK_SHAPE_HULL: return s->u.hull->vertex_count;
+    default: return 0;
+    }
+}
+
+/* Core vertex by the index mk_core_support reports; the index must be in
+ * [0, mk_core_vertex_count(s)). Warm starts rebuild cached simplices with it. */
+static inline mk_vec3 mk_core_vertex(const mk_shape *s, int i)
+{
+    switch (s->type) {
+    case MK_SHAPE_BOX: {
+        mk_vec3 h = s->u.half_extents;
+        return mk_v3((i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z);
+    }
+    case MK_SHAPE_CAPSULE: return mk_v3(0, 0, i ? s->u.capsule.half_height : -s->u.capsule.half_height);
+    case MK_SHAPE_HULL: return s->u.hull->vertices[i];
+    default: return mk_v3_zero();
+    }
+}
+
 /* 1 if the core is a polytope whose vertices mk_core_support enumerates
  * (box, hull, capsule segment, sphere point). */
 int mk_core_is_polytope(const mk_shape *s);

@@ -7,6 +7,7 @@
 
 #include "minko/shape.h"
 #include "support/mk_test.h"
+#include "support/cases.h"
 #include "support/oracle.h"
 
 #define SQRT2 1.41421356237309504880L
@@ -324,6 +325,56 @@ START_TEST(random_hulls_consistent)
 }
 END_TEST
 
+/* The shared case families: requested counts and signs, unit normals,
+ * deterministic, and the regression cases carry the answers their reports
+ * describe. */
+START_TEST(case_families)
+{
+    mk_case_set s1, s2;
+    int f, i, n;
+    memset(&s1, 0, sizeof s1);
+    memset(&s2, 0, sizeof s2);
+    for (f = 0; f < MK_FAM_COUNT; ++f) {
+        ck_assert_msg(mk_cases_add_family(&s1, (mk_family)f, 3, 2, 99) == 0, "family %s", mk_family_name((mk_family)f));
+        ck_assert_int_eq(mk_cases_add_family(&s2, (mk_family)f, 3, 2, 99), 0);
+    }
+    ck_assert_int_eq(s1.count, 5 * MK_FAM_COUNT);
+    ck_assert_int_eq(s2.count, s1.count);
+    for (i = 0; i < s1.count; ++i) {
+        const mk_case *c = &s1.cases[i];
+        long double nl = sqrtl((long double)c->normal[0] * c->normal[0] + (long double)c->normal[1] * c->normal[1] +
+                               (long double)c->normal[2] * c->normal[2]);
+        ck_assert_str_eq(c->variant, i % 5 < 3 ? "separated" : "penetrating");
+        ck_assert_msg(i % 5 < 3 ? c->distance > 0 : c->distance < 0, "%s/%s d = %g", c->family, c->variant, c->distance);
+        ck_assert(fabsl(nl - 1) < 1e-15L);
+        ck_assert(c->distance == s2.cases[i].distance && c->xb.p.x == s2.cases[i].xb.p.x);
+        if (!strcmp(c->family, "nearly_touching"))
+            ck_assert(fabs(c->distance) > 0.3e-6 * c->size && fabs(c->distance) < 3e-6 * c->size);
+    }
+    mk_case_set_free(&s2);
+    n = s1.count;
+    ck_assert_int_eq(mk_cases_add_regressions(&s1), 0);
+    for (i = n; i < s1.count; ++i) {
+        const mk_case *c = &s1.cases[i];
+        if (!strcmp(c->variant, "libccd25_stacked_cubes")) {
+            MK_ASSERT_NEAR(c->distance, (double)(mk_real)1.9 - 2, 1e-15);
+            ck_assert(c->normal_defined && c->normal[2] == 1);
+        }
+        if (!strcmp(c->variant, "touching_faces")) ck_assert(c->distance == 0 && c->normal_defined);
+        if (!strcmp(c->variant, "touching_corners")) ck_assert(c->distance == 0 && !c->normal_defined);
+        if (!strcmp(c->variant, "libccd17_5m_vs_0.2m")) MK_ASSERT_NEAR(c->distance, -0.01, 4 * MK_TEST_TOL);
+#if !defined(MK_SINGLE) /* float cannot place a box 1e-9 off */
+        if (!strcmp(c->variant, "fcl495_gap_1e-9")) MK_ASSERT_NEAR(c->distance, 1e-9, 1e-15);
+        if (!strcmp(c->variant, "fcl495_overlap_1e-9")) MK_ASSERT_NEAR(c->distance, -1e-9, 1e-15);
+        if (!strcmp(c->variant, "fcl493_kissing")) ck_assert(fabs(c->distance) < 1e-15);
+#endif
+        if (!strcmp(c->variant, "jolt2103_capsule_cylinder")) ck_assert(fabs(c->distance) < 1e-5);
+    }
+    ck_assert_int_eq(s1.count - n, 8);
+    mk_case_set_free(&s1);
+}
+END_TEST
+
 static Suite *oracle_suite(void)
 {
     Suite *s = suite_create("oracle");
@@ -337,6 +388,7 @@ static Suite *oracle_suite(void)
     tcase_add_test(tc, large_coordinates_invariant);
     tcase_add_test(tc, hull_topology);
     tcase_add_test(tc, random_hulls_consistent);
+    tcase_add_test(tc, case_families);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -16,6 +16,12 @@
 
 #include <btBulletCollisionCommon.h>
 
+#include <atomic>
+#include <map>
+#include <vector>
+
+#include "minko/broadphase.h"
+#include "minko/manifold.h"
 #include "minko/shape.h"
 
 static_assert(sizeof(btScalar) == sizeof(mk_real),
@@ -23,6 +29,9 @@ static_assert(sizeof(btScalar) == sizeof(mk_real),
               "bullet-float64 (BT_USE_DOUBLE_PRECISION) and PRECISION=single with bullet");
 
 namespace mkb {
+
+// Which collision code a world runs: Bullet's own or Minko's.
+enum class Backend { native, minko };
 
 // A Bullet shape seen by Minko: the Minko shape and the rotation that takes
 // Minko's local frame into the Bullet shape's local frame (identity except for
@@ -45,6 +54,145 @@ mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out);
 
 // World pose of the mapped shape for a Bullet world transform.
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map);
+
+// A btBroadphaseInterface on a Minko broadphase (minko/broadphase.h: SAP,
+// hierarchical grid, or the automatic choice). Bullet's own
+// btHashedOverlappingPairCache stays the pair store, so each pair's collision
+// algorithm and manifold live where Bullet expects them; Minko's added and
+// removed pair events are applied to it once per step in
+// calculateOverlappingPairs(). Behaves as btDbvtBroadphase does where Bullet
+// can tell: proxy uids count from 1 in creation order (resetPool() restarts
+// them when empty), destroyProxy() removes the proxy's pairs first, every new
+// pair goes through the cache's needsBroadphaseCollision (group/mask AND, or
+// the user's btOverlapFilterCallback) once, when it starts to overlap, and
+// static-filtered proxies (group StaticFilter only, mask without it, as
+// btDiscreteDynamicsWorld gives static and kinematic bodies) cost Minko nothing
+// against each other unless a filter callback is installed. The pair set is
+// exact on the AABBs Bullet hands in (no fattening, unlike Dbvt's stale
+// pairs). rayTest() and aabbTest() use Minko's queries, are reentrant, and see
+// AABBs set since the last step too; rayTest() grows every proxy by the cast
+// shape's box as Dbvt does. Huge AABBs (btStaticPlaneShape) are ordinary
+// proxies. A NaN AABB is refused and the proxy keeps its last good box
+// (last_error() tells). Memory: one Minko broadphase whose proxy capacity
+// doubles, by rebuilding it, when Bullet adds more proxies than it holds.
+class Broadphase : public btBroadphaseInterface {
+public:
+    // `cache`: a pair cache to use (not owned, not deferred-removal), or
+    // nullptr for an owned btHashedOverlappingPairCache.
+    explicit Broadphase(mk_bp_kind kind = MK_BP_AUTO, btHashedOverlappingPairCache *cache = nullptr,
+                        int initial_capacity = 1024);
+    ~Broadphase() override;
+    Broadphase(const Broadphase &) = delete;
+    Broadphase &operator=(const Broadphase &) = delete;
+
+    btBroadphaseProxy *createProxy(const btVector3 &aabbMin, const btVector3 &aabbMax, int shapeType, void *userPtr,
+                                   int collisionFilterGroup, int collisionFilterMask, btDispatcher *dispatcher) override;
+    void destroyProxy(btBroadphaseProxy *proxy, btDispatcher *dispatcher) override;
+    void setAabb(btBroadphaseProxy *proxy, const btVector3 &aabbMin, const btVector3 &aabbMax,
+                 btDispatcher *dispatcher) override;
+    void getAabb(btBroadphaseProxy *proxy, btVector3 &aabbMin, btVector3 &aabbMax) const override;
+    void rayTest(const btVector3 &rayFrom, const btVector3 &rayTo, btBroadphaseRayCallback &rayCallback,
+                 const btVector3 &aabbMin = btVector3(0, 0, 0), const btVector3 &aabbMax = btVector3(0, 0, 0)) override;
+    void aabbTest(const btVector3 &aabbMin, const btVector3 &aabbMax, btBroadphaseAabbCallback &callback) override;
+    void calculateOverlappingPairs(btDispatcher *dispatcher) override;
+    btOverlappingPairCache *getOverlappingPairCache() override { return m_cache; }
+    const btOverlappingPairCache *getOverlappingPairCache() const override { return m_cache; }
+    void getBroadphaseAabb(btVector3 &aabbMin, btVector3 &aabbMax) const override;
+    void resetPool(btDispatcher *dispatcher) override;
+    void printStats() override;
+
+    // The first error Minko reported since the last call (MK_OK if none).
+    mk_status take_error();
+    const mk_bp *minko() const { return m_bp; }
+
+    struct Proxy;
+
+private:
+    mk_status rebuild(int capacity);
+    void reconcile(btDispatcher *dispatcher);
+    void note(mk_status st)
+    {
+        if (m_error == MK_OK) m_error = st;
+    }
+    bool may_be_minko_static(int group, int mask) const;
+
+    mk_bp *m_bp = nullptr;
+    mk_bp_kind m_kind;
+    int m_capacity;
+    btHashedOverlappingPairCache *m_cache;
+    bool m_own_cache;
+    std::vector<Proxy *> m_proxies;  // live proxies, any order
+    std::vector<Proxy *> m_dirty;    // created or moved since the last update
+    int m_uid = 0;
+    int m_frame = 0;
+    bool m_reconcile = false;        // next update: full mark-and-sweep instead of events
+    const btOverlapFilterCallback *m_filter_seen = nullptr;
+    mk_status m_error = MK_OK;
+};
+
+// A btDefaultCollisionConfiguration whose dispatcher runs Minko's contact
+// manifolds (mk_collide) for every pair of sphere, box, capsule X/Y/Z,
+// cylinder X/Y/Z, cone X/Y/Z, convex hull and static plane (both orders;
+// plane-plane excluded) and Bullet's own algorithms for everything else
+// (meshes, compounds, soft bodies) and for any pair this build of Minko
+// refuses (a module left out, a shape Minko rejects): the choice is made per
+// pair when its algorithm is created. Each Minko algorithm writes the whole
+// manifold every step in Bullet's conventions (normal on B pointing from B to
+// A, point on B, negative distance = penetration, points up to the manifold's
+// contact breaking threshold apart kept as speculative contacts) and matches
+// points to the cached ones by Minko feature ID, so m_appliedImpulse follows
+// its contact (contact_writer.h). Hull shapes are converted once per shape and
+// cached here, keyed by the shape (a btConvexHullShape must not change its
+// points while this configuration uses it, as with Bullet's polyhedral
+// features). m_customCollisionAlgorithmMaxElementSize is raised to fit the
+// Minko algorithm. Closest-point queries (contactTest) stay Bullet's.
+// Backend::native makes this exactly btDefaultCollisionConfiguration;
+// set_narrowphase() switches a running world.
+class CollisionConfiguration : public btDefaultCollisionConfiguration {
+public:
+    explicit CollisionConfiguration(Backend narrowphase = Backend::minko,
+                                    const btDefaultCollisionConstructionInfo &info = btDefaultCollisionConstructionInfo());
+    ~CollisionConfiguration() override;
+    CollisionConfiguration(const CollisionConfiguration &) = delete;
+    CollisionConfiguration &operator=(const CollisionConfiguration &) = delete;
+
+    btCollisionAlgorithmCreateFunc *getCollisionAlgorithmCreateFunc(int proxyType0, int proxyType1) override;
+
+    Backend narrowphase() const { return m_backend; }
+    // Takes effect for dispatchers built afterwards; see set_narrowphase() for a running world.
+    void set_backend(Backend b) { m_backend = b; }
+    // Shapes of the types above, hulls through the cache. MK_ERR_UNSUPPORTED otherwise.
+    mk_status map_shape(const btCollisionShape *shape, ShapeMap *out);
+    // Bullet's own create function for a pair of shape types.
+    btCollisionAlgorithmCreateFunc *native_create_func(int proxyType0, int proxyType1)
+    {
+        return btDefaultCollisionConfiguration::getCollisionAlgorithmCreateFunc(proxyType0, proxyType1);
+    }
+    // Whether mk_collide handles this pair of mapped shapes in this build.
+    static bool minko_handles(const ShapeMap &a, const ShapeMap &b);
+
+    struct Stats {
+        std::atomic<long> minko_algorithms{0};  // pair algorithms created on Minko
+        std::atomic<long> native_fallbacks{0};  // pairs of Minko-registered types left to Bullet
+        std::atomic<long> collide_errors{0};    // mk_collide calls that failed (no contacts that step)
+    };
+    Stats stats;
+
+private:
+    struct CreateFunc;
+    Backend m_backend;
+    CreateFunc *m_create;
+};
+
+// True for the shape types the Minko narrowphase is registered for.
+bool minko_shape_type(int proxyType);
+
+// Switch a running world's narrowphase: re-registers the dispatcher's create
+// functions for Minko's shape types and drops every pair's algorithm (their
+// manifolds and warm-start state go with them), so the next step builds new
+// ones. The world's dispatcher must be a btCollisionDispatcher built on an
+// mkb::CollisionConfiguration; returns false otherwise.
+bool set_narrowphase(btCollisionWorld *world, Backend b);
 
 }  // namespace mkb
 

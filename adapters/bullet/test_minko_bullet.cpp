@@ -1,13 +1,20 @@
 // test_minko_bullet.cpp: the Bullet adapter's Check suite (C++11), run by
 // `make check` in every build: double Minko with bullet-float64, single Minko
 // with float Bullet, both also under ASan + UBSan.
+#include <algorithm>
 #include <cmath>
-#include <memory>
+#include <limits>
+#include <utility>
 #include <vector>
+
+#include <btBulletDynamicsCommon.h>
 
 #include "contact_writer.h"
 #include "minko_bullet.h"
 #include "support/mk_test.h"
+extern "C" {
+#include "support/oracle.h"
+}
 
 namespace {
 
@@ -342,6 +349,660 @@ START_TEST(writer_mesh_parts_left_to_bullet)
 }
 END_TEST
 
+
+// ---- the broadphase ----------------------------------------------------------
+
+// A small dynamics world on a given broadphase; bodies and shapes owned.
+struct TestWorld {
+    btDefaultCollisionConfiguration config;
+    btCollisionDispatcher dispatcher{&config};
+    btBroadphaseInterface *bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld *world;
+    std::vector<btCollisionShape *> shapes;
+    std::vector<btRigidBody *> bodies;
+
+    explicit TestWorld(btBroadphaseInterface *broadphase) : bp(broadphase)
+    {
+        world = new btDiscreteDynamicsWorld(&dispatcher, bp, &solver, &config);
+        world->getDispatchInfo().m_deterministicOverlappingPairs = true;
+        world->setGravity(btVector3(0, -10, 0));
+    }
+    ~TestWorld()
+    {
+        while (!bodies.empty()) remove(bodies.back());
+        delete world;
+        delete bp;
+        for (btCollisionShape *s : shapes) delete s;
+    }
+    btCollisionShape *own(btCollisionShape *s)
+    {
+        shapes.push_back(s);
+        return s;
+    }
+    btRigidBody *add(btCollisionShape *shape, btScalar mass, const btVector3 &at, int group = 0, int mask = 0)
+    {
+        btVector3 inertia(0, 0, 0);
+        if (mass > 0) shape->calculateLocalInertia(mass, inertia);
+        btRigidBody *b = new btRigidBody(mass, nullptr, shape, inertia);
+        b->setWorldTransform(btTransform(btQuaternion::getIdentity(), at));
+        if (group) world->addRigidBody(b, group, mask);
+        else world->addRigidBody(b);
+        bodies.push_back(b);
+        return b;
+    }
+    void remove(btRigidBody *b)
+    {
+        world->removeRigidBody(b);
+        bodies.erase(std::find(bodies.begin(), bodies.end(), b));
+        delete b;
+    }
+};
+
+// The scene every broadphase test shares: a static ground box, a tilted
+// static plane, a few static boxes touching each other (static-static pairs
+// must never appear), a kinematic box sliding through, and a pile of seeded
+// random boxes, spheres and capsules falling onto the ground.
+void fill_scene(TestWorld &w, int count, unsigned long long seed)
+{
+    btCollisionShape *ground = w.own(new btBoxShape(btVector3(20, 1, 20)));
+    w.add(ground, 0, btVector3(0, -1, 0));
+    w.add(w.own(new btStaticPlaneShape(btVector3(1, 1, 0).normalized(), -6)), 0, btVector3(0, 0, 0));
+    btCollisionShape *post = w.own(new btBoxShape(btVector3(btScalar(0.5), 2, btScalar(0.5))));
+    for (int i = 0; i < 3; i++) w.add(post, 0, btVector3(btScalar(4 + i), 2, 4));
+    btRigidBody *kin = w.add(w.own(new btBoxShape(btVector3(1, btScalar(0.5), 1))), 0, btVector3(-6, btScalar(0.5), 0));
+    kin->setCollisionFlags(kin->getCollisionFlags() | btCollisionObject::CF_KINEMATIC_OBJECT);
+    kin->setActivationState(DISABLE_DEACTIVATION);
+    btCollisionShape *kinds[3] = {w.own(new btBoxShape(btVector3(btScalar(0.4), btScalar(0.3), btScalar(0.5)))),
+                                  w.own(new btSphereShape(btScalar(0.35))),
+                                  w.own(new btCapsuleShape(btScalar(0.2), btScalar(0.6)))};
+    mk_rng rng = {seed};
+    for (int i = 0; i < count; i++) {
+        btVector3 at((btScalar)mk_rng_range(&rng, -3, 3), (btScalar)mk_rng_range(&rng, 1, 8), (btScalar)mk_rng_range(&rng, -3, 3));
+        w.add(kinds[i % 3], 1, at);
+    }
+}
+
+// Moves the kinematic box along x (BodyIndex 5 in fill_scene's order).
+void drive_kinematic(TestWorld &w, int step)
+{
+    btRigidBody *kin = w.bodies[5];
+    btTransform t = kin->getWorldTransform();
+    t.setOrigin(btVector3(btScalar(-6 + 0.1 * step), btScalar(0.5), 0));
+    kin->setWorldTransform(t);
+}
+
+typedef std::vector<std::pair<int, int> > UidPairs;
+
+UidPairs cache_pairs(btBroadphaseInterface *bp)
+{
+    UidPairs out;
+    btBroadphasePairArray &a = bp->getOverlappingPairCache()->getOverlappingPairArray();
+    for (int i = 0; i < a.size(); i++) {
+        int u = a[i].m_pProxy0->m_uniqueId, v = a[i].m_pProxy1->m_uniqueId;
+        out.push_back(std::make_pair(std::min(u, v), std::max(u, v)));
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+// Every pair of proxies whose stored AABBs overlap (closed) and that the pair
+// cache's filter accepts: what an exact broadphase must report.
+UidPairs brute_pairs(TestWorld &w)
+{
+    UidPairs out;
+    btOverlappingPairCache *cache = w.bp->getOverlappingPairCache();
+    btCollisionObjectArray &objs = w.world->getCollisionObjectArray();
+    for (int i = 0; i < objs.size(); i++) {
+        for (int j = i + 1; j < objs.size(); j++) {
+            btBroadphaseProxy *a = objs[i]->getBroadphaseHandle(), *b = objs[j]->getBroadphaseHandle();
+            if (!TestAabbAgainstAabb2(a->m_aabbMin, a->m_aabbMax, b->m_aabbMin, b->m_aabbMax)) continue;
+            if (!cache->needsBroadphaseCollision(a, b)) continue;
+            out.push_back(std::make_pair(std::min(a->m_uniqueId, b->m_uniqueId), std::max(a->m_uniqueId, b->m_uniqueId)));
+        }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+void check_exact_pairs(TestWorld &w, int step)
+{
+    UidPairs got = cache_pairs(w.bp), want = brute_pairs(w);
+    ck_assert_msg(got == want, "step %d: %d pairs in the cache, %d overlapping and accepted", step, (int)got.size(),
+                  (int)want.size());
+}
+
+START_TEST(bp_pairs_exact_every_step)
+{
+    const mk_bp_kind kinds[3] = {MK_BP_SAP, MK_BP_HGRID, MK_BP_AUTO};
+    for (mk_bp_kind kind : kinds) {
+        TestWorld w(new mkb::Broadphase(kind));
+        fill_scene(w, 60, 7);
+        for (int step = 0; step < 90; step++) {
+            drive_kinematic(w, step);
+            w.world->stepSimulation(btScalar(1) / 60, 0);
+            check_exact_pairs(w, step);
+        }
+        // uids: creation order from 1.
+        for (size_t i = 0; i < w.bodies.size(); i++)
+            ck_assert_int_eq(w.bodies[i]->getBroadphaseHandle()->m_uniqueId, (int)i + 1);
+        ck_assert_int_eq(static_cast<mkb::Broadphase *>(w.bp)->take_error(), MK_OK);
+    }
+}
+END_TEST
+
+// Same scene on Bullet's exact reference broadphase (btSimpleBroadphase) and on
+// Minko: with deterministic pair order the simulations are bit-identical.
+START_TEST(bp_same_trajectories_as_bullet)
+{
+    TestWorld ref(new btSimpleBroadphase(256));
+    TestWorld dbvt(new btDbvtBroadphase());
+    TestWorld mine(new mkb::Broadphase(MK_BP_AUTO));
+    for (TestWorld *w : {&ref, &dbvt, &mine}) {
+        fill_scene(*w, 40, 11);
+        for (int step = 0; step < 120; step++) {
+            drive_kinematic(*w, step);
+            w->world->stepSimulation(btScalar(1) / 60, 0);
+        }
+    }
+    for (size_t i = 0; i < ref.bodies.size(); i++) {
+        const btVector3 &p = ref.bodies[i]->getWorldTransform().getOrigin();
+        const btVector3 &q = mine.bodies[i]->getWorldTransform().getOrigin();
+        const btVector3 &d = dbvt.bodies[i]->getWorldTransform().getOrigin();
+        ck_assert_msg(p == q, "body %d: simple (%.17g %.17g %.17g) minko (%.17g %.17g %.17g)", (int)i, (double)p.x(),
+                      (double)p.y(), (double)p.z(), (double)q.x(), (double)q.y(), (double)q.z());
+        ck_assert_msg(d == q, "body %d: dbvt (%.17g %.17g %.17g) minko (%.17g %.17g %.17g)", (int)i, (double)d.x(),
+                      (double)d.y(), (double)d.z(), (double)q.x(), (double)q.y(), (double)q.z());
+    }
+}
+END_TEST
+
+// Bodies removed (some in contact) and added while the simulation runs: no pair
+// may outlive its proxy, and the set stays exact.
+START_TEST(bp_proxy_removal_during_simulation)
+{
+    TestWorld w(new mkb::Broadphase(MK_BP_SAP, nullptr, 16));  // small: also grows by rebuilding
+    fill_scene(w, 50, 3);
+    btCollisionShape *extra = w.own(new btSphereShape(btScalar(0.3)));
+    mk_rng rng = {99};
+    for (int step = 0; step < 120; step++) {
+        drive_kinematic(w, step);
+        w.world->stepSimulation(btScalar(1) / 60, 0);
+        check_exact_pairs(w, step);
+        if (step % 10 == 9) {
+            // Remove three dynamic bodies (index >= 6 keeps the static ones and the kinematic box).
+            for (int k = 0; k < 3 && w.bodies.size() > 6; k++) {
+                size_t victim = 6 + (size_t)(mk_rng_unit(&rng) * (double)(w.bodies.size() - 6));
+                btBroadphaseProxy *gone = w.bodies[victim]->getBroadphaseHandle();
+                w.remove(w.bodies[victim]);
+                btBroadphasePairArray &a = w.bp->getOverlappingPairCache()->getOverlappingPairArray();
+                for (int i = 0; i < a.size(); i++) ck_assert(a[i].m_pProxy0 != gone && a[i].m_pProxy1 != gone);
+            }
+            w.add(extra, 1, btVector3(0, 5, 0));
+            w.world->computeOverlappingPairs();  // pairs of a new proxy appear at the next update
+            check_exact_pairs(w, step);
+        }
+    }
+}
+END_TEST
+
+struct CountingFilter : btOverlapFilterCallback {
+    int calls = 0, static_static = 0;
+    bool needBroadphaseCollision(btBroadphaseProxy *a, btBroadphaseProxy *b) const override
+    {
+        CountingFilter *self = const_cast<CountingFilter *>(this);
+        self->calls++;
+        const btCollisionObject *oa = static_cast<const btCollisionObject *>(a->m_clientObject);
+        const btCollisionObject *ob = static_cast<const btCollisionObject *>(b->m_clientObject);
+        if (oa->isStaticObject() && ob->isStaticObject()) self->static_static++;
+        // Reject pairs with the odd-uid sphere group, accept the rest.
+        return !((a->m_collisionFilterGroup & 64) && (b->m_collisionFilterGroup & 64));
+    }
+};
+
+// Group/mask AND test as Bullet's cache does it; a user filter callback, even
+// installed late, sees static-static candidates too, is asked once per new
+// overlap (not every step), and its verdict holds.
+START_TEST(bp_filtering)
+{
+    TestWorld w(new mkb::Broadphase(MK_BP_HGRID));
+    fill_scene(w, 20, 5);
+    btCollisionShape *ball = w.own(new btSphereShape(btScalar(0.5)));
+    // Group 64 objects that exclude each other by mask, overlapping from the start.
+    for (int i = 0; i < 4; i++) w.add(ball, 1, btVector3(btScalar(0.5 * i), 10, 0), 64, ~64);
+    for (int step = 0; step < 30; step++) {
+        w.world->stepSimulation(btScalar(1) / 60, 0);
+        check_exact_pairs(w, step);
+    }
+    UidPairs got = cache_pairs(w.bp);
+    for (const auto &p : got)
+        ck_assert(!(w.bodies[p.first - 1]->getBroadphaseHandle()->m_collisionFilterGroup & 64 &&
+                    w.bodies[p.second - 1]->getBroadphaseHandle()->m_collisionFilterGroup & 64));
+
+    CountingFilter filter;
+    w.bp->getOverlappingPairCache()->setOverlapFilterCallback(&filter);
+    // Two more static posts touching the first ones, and group-64 balls that now pass the mask.
+    btCollisionShape *post = w.shapes[2];
+    w.add(post, 0, btVector3(7, 2, 4));
+    for (int i = 0; i < 3; i++) w.add(ball, 1, btVector3(btScalar(-4 + 0.6 * i), 3, -4), 64, -1);
+    w.world->stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_gt(filter.static_static, 0);  // asked about static-static candidates, as Dbvt would
+    const int after_first = filter.calls;
+    for (int step = 0; step < 5; step++) w.world->stepSimulation(btScalar(1) / 60, 0);
+    // Only overlaps that began in these steps were asked about: far fewer than the pairs held.
+    ck_assert_int_lt(filter.calls - after_first, w.bp->getOverlappingPairCache()->getNumOverlappingPairs());
+    got = cache_pairs(w.bp);
+    for (const auto &p : got)
+        ck_assert(!(w.bodies[p.first - 1]->getBroadphaseHandle()->m_collisionFilterGroup & 64 &&
+                    w.bodies[p.second - 1]->getBroadphaseHandle()->m_collisionFilterGroup & 64));
+    w.bp->getOverlappingPairCache()->setOverlapFilterCallback(nullptr);
+}
+END_TEST
+
+struct HitSet : btCollisionWorld::AllHitsRayResultCallback {
+    HitSet(const btVector3 &a, const btVector3 &b) : btCollisionWorld::AllHitsRayResultCallback(a, b) {}
+    std::vector<std::pair<int, double> > sorted() const
+    {
+        std::vector<std::pair<int, double> > v;
+        for (int i = 0; i < m_collisionObjects.size(); i++)
+            v.push_back(std::make_pair(m_collisionObjects[i]->getBroadphaseHandle()->m_uniqueId, (double)m_hitFractions[i]));
+        std::sort(v.begin(), v.end());
+        return v;
+    }
+};
+
+// Ray tests and convex sweeps through the world give the same hits as on Dbvt,
+// also for objects moved since the last step (the broadphase has not updated yet).
+START_TEST(bp_ray_and_sweep_hits_equal_native)
+{
+    TestWorld dbvt(new btDbvtBroadphase());
+    TestWorld mine(new mkb::Broadphase(MK_BP_AUTO));
+    for (TestWorld *w : {&dbvt, &mine}) {
+        fill_scene(*w, 40, 21);
+        for (int step = 0; step < 30; step++) w->world->stepSimulation(btScalar(1) / 60, 0);
+        // Teleport one body after the step and refresh its AABB only.
+        btRigidBody *b = w->bodies[10];
+        b->setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 15, 0)));
+        w->world->updateSingleAabb(b);
+    }
+    btSphereShape probe(btScalar(0.25));
+    mk_rng rng = {1234};
+    int hits = 0;
+    for (int r = 0; r < 200; r++) {
+        btVector3 from((btScalar)mk_rng_range(&rng, -8, 8), (btScalar)mk_rng_range(&rng, 0, 20), (btScalar)mk_rng_range(&rng, -8, 8));
+        btVector3 to((btScalar)mk_rng_range(&rng, -8, 8), (btScalar)mk_rng_range(&rng, -2, 10), (btScalar)mk_rng_range(&rng, -8, 8));
+        if (r % 10 == 0) to = btVector3(0, -5, 0), from = btVector3(0, 20, 0);  // through the teleported body
+        HitSet a(from, to), b(from, to);
+        dbvt.world->rayTest(from, to, a);
+        mine.world->rayTest(from, to, b);
+        ck_assert_msg(a.sorted() == b.sorted(), "ray %d: %d hits on Dbvt, %d on Minko", r, a.m_collisionObjects.size(),
+                      b.m_collisionObjects.size());
+        hits += a.m_collisionObjects.size();
+        btTransform t0(btQuaternion::getIdentity(), from), t1(btQuaternion::getIdentity(), to);
+        btCollisionWorld::ClosestConvexResultCallback ca(from, to), cb(from, to);
+        dbvt.world->convexSweepTest(&probe, t0, t1, ca);
+        mine.world->convexSweepTest(&probe, t0, t1, cb);
+        ck_assert_int_eq(ca.hasHit(), cb.hasHit());
+        if (ca.hasHit()) {
+            ck_assert_int_eq(ca.m_hitCollisionObject->getBroadphaseHandle()->m_uniqueId,
+                             cb.m_hitCollisionObject->getBroadphaseHandle()->m_uniqueId);
+            ck_assert(ca.m_closestHitFraction == cb.m_closestHitFraction);
+        }
+    }
+    ck_assert_int_gt(hits, 100);  // the rays do hit things
+    // aabbTest: Minko reports exactly the proxies whose boxes overlap the
+    // query (Dbvt's fat leaves report a superset); contactTest on top of it
+    // finds the same touching contacts.
+    btBoxShape box(btVector3(2, 2, 2));
+    btCollisionObject query;
+    query.setCollisionShape(&box);
+    query.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 1, 0)));
+    btVector3 qlo, qhi;
+    box.getAabb(query.getWorldTransform(), qlo, qhi);
+    struct Collect : btBroadphaseAabbCallback {
+        std::vector<int> uids;
+        bool process(const btBroadphaseProxy *p) override
+        {
+            uids.push_back(p->m_uniqueId);
+            return true;
+        }
+    } na, mi;
+    dbvt.bp->aabbTest(qlo, qhi, na);
+    mine.bp->aabbTest(qlo, qhi, mi);
+    std::vector<int> exact;
+    btCollisionObjectArray &objs = mine.world->getCollisionObjectArray();
+    for (int i = 0; i < objs.size(); i++) {
+        btBroadphaseProxy *h = objs[i]->getBroadphaseHandle();
+        if (TestAabbAgainstAabb2(qlo, qhi, h->m_aabbMin, h->m_aabbMax)) exact.push_back(h->m_uniqueId);
+    }
+    std::sort(na.uids.begin(), na.uids.end());
+    std::sort(mi.uids.begin(), mi.uids.end());
+    ck_assert_int_gt((int)exact.size(), 3);
+    ck_assert(mi.uids == exact);
+    ck_assert(std::includes(na.uids.begin(), na.uids.end(), exact.begin(), exact.end()));
+    struct Touching : btCollisionWorld::ContactResultCallback {
+        std::vector<int> uids;
+        btScalar addSingleResult(btManifoldPoint &cp, const btCollisionObjectWrapper *, int, int,
+                                 const btCollisionObjectWrapper *b, int, int) override
+        {
+            if (cp.getDistance() <= 0) uids.push_back(b->getCollisionObject()->getBroadphaseHandle()->m_uniqueId);
+            return 0;
+        }
+    } ka, kb;
+    dbvt.world->contactTest(&query, ka);
+    mine.world->contactTest(&query, kb);
+    std::sort(ka.uids.begin(), ka.uids.end());
+    std::sort(kb.uids.begin(), kb.uids.end());
+    ck_assert_int_gt((int)ka.uids.size(), 0);
+    ck_assert(ka.uids == kb.uids);
+}
+END_TEST
+
+// Bad AABBs are refused with a status and the proxy keeps its last box;
+// resetPool restarts uids once the broadphase is empty.
+START_TEST(bp_bad_input_and_reset)
+{
+    mkb::Broadphase bp(MK_BP_SAP);
+    btCollisionObject o;
+    btBroadphaseProxy *p = bp.createProxy(btVector3(0, 0, 0), btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, &o, 1, -1, nullptr);
+    ck_assert_ptr_nonnull(p);
+    ck_assert_int_eq(p->m_uniqueId, 1);
+    const btScalar nan = std::numeric_limits<btScalar>::quiet_NaN();
+    bp.setAabb(p, btVector3(nan, 0, 0), btVector3(1, 1, 1), nullptr);
+    ck_assert_int_eq(bp.take_error(), MK_ERR_BAD_AABB);
+    ck_assert_int_eq(bp.take_error(), MK_OK);
+    btVector3 lo, hi;
+    bp.getAabb(p, lo, hi);
+    ck_assert(lo == btVector3(0, 0, 0) && hi == btVector3(1, 1, 1));
+    bp.setAabb(p, btVector3(2, 2, 2), btVector3(1, 1, 1), nullptr);  // lo > hi
+    ck_assert_int_eq(bp.take_error(), MK_ERR_BAD_AABB);
+    bp.calculateOverlappingPairs(nullptr);
+    bp.destroyProxy(p, nullptr);
+    bp.resetPool(nullptr);
+    p = bp.createProxy(btVector3(0, 0, 0), btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, &o, 1, -1, nullptr);
+    ck_assert_int_eq(p->m_uniqueId, 1);
+    bp.destroyProxy(p, nullptr);
+}
+END_TEST
+
+
+// ---- the narrowphase ----------------------------------------------------------
+
+struct PointOut {
+    btVector3 normal_on_b, on_a, on_b;
+    double distance;
+    int part0, part1;
+};
+
+// One processCollision of the pair (a at xa, b at xb) through a dispatcher
+// built on `config`; returns the manifold's points.
+std::vector<PointOut> collide_once(btCollisionConfiguration *config, btCollisionShape *a, const btTransform &xa,
+                                   btCollisionShape *b, const btTransform &xb, bool *minko_algorithm = nullptr)
+{
+    btCollisionDispatcher dispatcher(config);
+    btCollisionObject oa, ob;
+    oa.setCollisionShape(a);
+    ob.setCollisionShape(b);
+    oa.setWorldTransform(xa);
+    ob.setWorldTransform(xb);
+    btCollisionObjectWrapper wa(nullptr, a, &oa, xa, -1, -1), wb(nullptr, b, &ob, xb, -1, -1);
+    mkb::CollisionConfiguration *mine = dynamic_cast<mkb::CollisionConfiguration *>(config);
+    long before = mine ? mine->stats.minko_algorithms.load() : 0;
+    btCollisionAlgorithm *algo = dispatcher.findAlgorithm(&wa, &wb, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+    if (minko_algorithm) *minko_algorithm = mine && mine->stats.minko_algorithms.load() > before;
+    btManifoldResult result(&wa, &wb);
+    btDispatcherInfo info;
+    algo->processCollision(&wa, &wb, info, &result);
+    std::vector<PointOut> out;
+    btManifoldArray manifolds;
+    algo->getAllContactManifolds(manifolds);
+    for (int m = 0; m < manifolds.size(); m++) {
+        // A manifold's normal is on its body 1 pointing to its body 0; Bullet's
+        // convex-plane algorithm orders its manifold (convex, plane) whatever
+        // the pair order. Report everything in the (a, b) order asked for.
+        const bool swapped = manifolds[m]->getBody0() != &oa;
+        for (int i = 0; i < manifolds[m]->getNumContacts(); i++) {
+            const btManifoldPoint &p = manifolds[m]->getContactPoint(i);
+            PointOut o = {swapped ? -p.m_normalWorldOnB : p.m_normalWorldOnB,
+                          swapped ? p.getPositionWorldOnB() : p.getPositionWorldOnA(),
+                          swapped ? p.getPositionWorldOnA() : p.getPositionWorldOnB(), (double)p.getDistance(),
+                          swapped ? p.m_partId1 : p.m_partId0, swapped ? p.m_partId0 : p.m_partId1};
+            out.push_back(o);
+        }
+    }
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
+    return out;
+}
+
+const PointOut *deepest(const std::vector<PointOut> &v)
+{
+    const PointOut *best = nullptr;
+    for (const PointOut &p : v)
+        if (!best || p.distance < best->distance) best = &p;
+    return best;
+}
+
+btTransform random_pose(mk_rng *rng, double spread)
+{
+    mk_quat q = mk_rng_quat(rng);
+    return btTransform(btQuaternion((btScalar)q.x, (btScalar)q.y, (btScalar)q.z, (btScalar)q.w),
+                       btVector3((btScalar)mk_rng_range(rng, -spread, spread), (btScalar)mk_rng_range(rng, -spread, spread),
+                                 (btScalar)mk_rng_range(rng, -spread, spread)));
+}
+
+#if defined(BT_USE_DOUBLE_PRECISION)
+const double kContactTol = 1e-9, kNormalTol = 1e-9;
+#else
+const double kContactTol = 2e-4, kNormalTol = 1e-5;
+#endif
+
+// The exact signed distance and normal of two Bullet convex shapes, by the
+// long double brute-force oracle on the mapped shapes (the mapping itself is
+// checked against Bullet's support functions by the shape tests).
+bool oracle_reference(const btCollisionShape *a, const btTransform &xa, const btCollisionShape *b, const btTransform &xb,
+                      PointOut *out)
+{
+    mkb::ShapeMap ma, mb;
+    if (mkb::map_primitive(a, &ma) != MK_OK || mkb::map_primitive(b, &mb) != MK_OK) return false;
+    mk_oracle_result r;
+    if (mk_oracle_distance(&ma.shape, mkb::minko_pose(xa, ma), &mb.shape, mkb::minko_pose(xb, mb), &r) != 0 ||
+        !r.normal_defined)
+        return false;
+    out->normal_on_b = -btVector3((btScalar)r.normal.x, (btScalar)r.normal.y, (btScalar)r.normal.z);
+    out->distance = (double)r.distance;
+    return true;
+}
+
+// Minko's contacts in Bullet's conventions agree with Bullet on the same poses:
+// the deepest point has the same signed distance and normal (normal on B
+// pointing from B to A, negative = penetration), every point satisfies
+// on_a = on_b + normal * distance with one normal per manifold. The
+// reference is Bullet's own algorithm where it models the same solids
+// (sphere-sphere, capsule pairs, shape-plane, box-box by btBoxBoxDetector),
+// and the exact oracle where Bullet's algorithm rounds the box by its margin
+// instead (btSphereBoxCollisionAlgorithm, GJK and EPA see a box rounded by
+// its margin; the shape's support function, its AABB and box-box see the
+// sharp box, which is what Minko models).
+START_TEST(np_conventions_match_bullet)
+{
+    btDefaultCollisionConfiguration native;
+    mkb::CollisionConfiguration mine;
+    btSphereShape sphere(btScalar(0.6));
+    btBoxShape box(btVector3(btScalar(0.8), btScalar(0.5), btScalar(0.3)));
+    btCapsuleShape capsule(btScalar(0.3), btScalar(0.8));
+    btCapsuleShapeZ capsule_z(btScalar(0.25), btScalar(0.5));
+    btStaticPlaneShape plane(btVector3(0, 1, 0), btScalar(0.2));
+    struct Case {
+        const char *name;
+        btCollisionShape *a, *b;
+        bool bullet_same_solid;  // false: compare with the oracle on the sharp solids
+        bool closed_form;        // Minko answers it in every build
+    } cases[] = {
+        {"sphere-sphere", &sphere, &sphere, true, true},       {"sphere-box", &sphere, &box, false, true},
+        {"box-sphere", &box, &sphere, false, true},            {"capsule-sphere", &capsule, &sphere, true, true},
+        {"capsule-capsule", &capsule, &capsule_z, true, true}, {"box-capsule", &box, &capsule, false, true},
+        {"capsule-box", &capsule_z, &box, false, true},        {"sphere-plane", &sphere, &plane, true, true},
+        {"plane-box", &plane, &box, true, true},               {"capsule-plane", &capsule, &plane, true, true},
+        {"box-box", &box, &box, true, false},
+    };
+    mk_rng rng = {777};
+    int compared = 0;
+    for (const Case &c : cases) {
+        int minko_used = 0;
+        for (int k = 0; k < 200; k++) {
+            btTransform xa = random_pose(&rng, 0.6), xb = random_pose(&rng, 0.6);
+            if (c.a == &plane) xa.setIdentity();
+            if (c.b == &plane) xb.setIdentity();
+            bool used_minko = false;
+            std::vector<PointOut> got = collide_once(&mine, c.a, xa, c.b, xb, &used_minko);
+            if (!used_minko) continue;  // left to Bullet in this build (e.g. box-box before SAT)
+            minko_used++;
+            PointOut ref = {btVector3(0, 0, 0), btVector3(0, 0, 0), btVector3(0, 0, 0), 0, -1, -1};
+            bool have_ref;
+            double tol;
+            if (c.bullet_same_solid) {
+                std::vector<PointOut> r = collide_once(&native, c.a, xa, c.b, xb);
+                have_ref = !r.empty();
+                if (have_ref) ref = *deepest(r);
+                tol = kContactTol;
+            } else {
+                have_ref = oracle_reference(c.a, xa, c.b, xb, &ref);
+                tol = kContactTol;
+            }
+            const PointOut *g = deepest(got);
+            if (!have_ref || ref.distance > -1e-3) continue;  // compare clear penetrations only
+            ck_assert_msg(g != nullptr, "%s pose %d: Bullet finds depth %g, Minko no contact", c.name, k, ref.distance);
+            ck_assert_msg(std::fabs(ref.distance - g->distance) <= tol, "%s pose %d: distance Bullet %.12g Minko %.12g",
+                          c.name, k, ref.distance, g->distance);
+            ck_assert_msg(ref.normal_on_b.dot(g->normal_on_b) >= 1 - 1e-6, "%s pose %d: normals differ: Bullet %g %g %g Minko %g %g %g (d %g %g)", c.name, k, (double)ref.normal_on_b.x(), (double)ref.normal_on_b.y(), (double)ref.normal_on_b.z(), (double)g->normal_on_b.x(), (double)g->normal_on_b.y(), (double)g->normal_on_b.z(), ref.distance, g->distance);
+            for (const PointOut &p : got) {
+                btVector3 gap = p.on_a - (p.on_b + p.normal_on_b * (btScalar)p.distance);
+                ck_assert_msg(gap.length() <= 1e-5, "%s pose %d: on_a != on_b + n d", c.name, k);
+                ck_assert_msg(p.normal_on_b.dot(g->normal_on_b) >= 1 - kNormalTol, "%s: one normal per manifold", c.name);
+            }
+            compared++;
+        }
+        if (c.closed_form) ck_assert_msg(minko_used == 200, "%s: left to Bullet", c.name);
+    }
+    ck_assert_int_gt(compared, 500);
+}
+END_TEST
+
+// A world on the Minko narrowphase: boxes, spheres and capsules settle on a
+// static plane; a box resting flat carries its weight on four points whose
+// features stay the same from step to step (lifetimes grow, warm starting
+// holds), and a sphere on a triangle mesh (left to Bullet) does not fall
+// through.
+START_TEST(np_world_rests_on_minko_contacts)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld world(&dispatcher, &bp, &solver, &config);
+    world.setGravity(btVector3(0, -10, 0));
+    btStaticPlaneShape ground(btVector3(0, 1, 0), 0);
+    btBoxShape box(btVector3(btScalar(0.5), btScalar(0.25), btScalar(0.5)));
+    btSphereShape ball(btScalar(0.3));
+    btCapsuleShapeX cap(btScalar(0.2), btScalar(0.6));
+    // A two-triangle mesh floor, off to the side.
+    btTriangleMesh tris;
+    tris.addTriangle(btVector3(10, 0, -2), btVector3(14, 0, -2), btVector3(10, 0, 2));
+    tris.addTriangle(btVector3(14, 0, -2), btVector3(14, 0, 2), btVector3(10, 0, 2));
+    btBvhTriangleMeshShape mesh(&tris, true);
+    std::vector<btRigidBody *> bodies;
+    auto add = [&](btCollisionShape *s, btScalar mass, const btVector3 &at) {
+        btVector3 inertia(0, 0, 0);
+        if (mass > 0) s->calculateLocalInertia(mass, inertia);
+        btRigidBody *b = new btRigidBody(mass, nullptr, s, inertia);
+        b->setWorldTransform(btTransform(btQuaternion::getIdentity(), at));
+        b->setActivationState(DISABLE_DEACTIVATION);
+        world.addRigidBody(b);
+        bodies.push_back(b);
+        return b;
+    };
+    add(&ground, 0, btVector3(0, 0, 0));
+    add(&mesh, 0, btVector3(0, btScalar(0.5), 0));
+    btRigidBody *flat = add(&box, 2, btVector3(0, btScalar(0.3), 0));
+    add(&ball, 1, btVector3(3, 2, 0));
+    add(&cap, 1, btVector3(-3, 1, 1));
+    btRigidBody *on_mesh = add(&ball, 1, btVector3(12, 2, 0));
+    for (int step = 0; step < 240; step++) world.stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_gt(config.stats.minko_algorithms.load(), 2);
+    ck_assert_int_eq(config.stats.collide_errors.load(), 0);
+    MK_ASSERT_NEAR(flat->getWorldTransform().getOrigin().y(), 0.25, 5e-3);
+    MK_ASSERT_NEAR(bodies[3]->getWorldTransform().getOrigin().y(), 0.3, 5e-3);
+    MK_ASSERT_NEAR(bodies[4]->getWorldTransform().getOrigin().y(), 0.2, 5e-3);
+    MK_ASSERT_NEAR(on_mesh->getWorldTransform().getOrigin().y(), 0.8, 2e-2);
+    // The flat box: find its manifold, check four points, their keys and the load they carry.
+    btPersistentManifold *m = nullptr;
+    for (int i = 0; i < dispatcher.getNumManifolds(); i++) {
+        btPersistentManifold *c = dispatcher.getManifoldByIndexInternal(i);
+        if (c->getBody0() == flat || c->getBody1() == flat) m = c;
+    }
+    ck_assert_ptr_nonnull(m);
+    ck_assert_int_eq(m->getNumContacts(), 4);
+    std::vector<std::pair<int, int> > keys;
+    double impulse = 0;
+    for (int i = 0; i < 4; i++) {
+        keys.push_back(std::make_pair(m->getContactPoint(i).m_partId0, m->getContactPoint(i).m_partId1));
+        impulse += m->getContactPoint(i).m_appliedImpulse;
+        ck_assert_int_gt(m->getContactPoint(i).getLifeTime(), 100);
+    }
+    MK_ASSERT_NEAR(impulse, 2 * 10.0 / 60, 0.05 * 2 * 10.0 / 60);
+    world.stepSimulation(btScalar(1) / 60, 0);
+    for (int i = 0; i < 4; i++) {
+        std::pair<int, int> k(m->getContactPoint(i).m_partId0, m->getContactPoint(i).m_partId1);
+        ck_assert(std::find(keys.begin(), keys.end(), k) != keys.end());
+    }
+    for (btRigidBody *b : bodies) {
+        world.removeRigidBody(b);
+        delete b;
+    }
+}
+END_TEST
+
+// A running world switches its narrowphase both ways; pairs get new
+// algorithms and the simulation goes on undisturbed.
+START_TEST(np_switch_at_run_time)
+{
+    mkb::CollisionConfiguration config(mkb::Backend::native);
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld world(&dispatcher, &bp, &solver, &config);
+    world.setGravity(btVector3(0, -10, 0));
+    btStaticPlaneShape ground(btVector3(0, 1, 0), 0);
+    btSphereShape ball(btScalar(0.3));
+    btRigidBody g(0, nullptr, &ground);
+    btVector3 inertia;
+    ball.calculateLocalInertia(1, inertia);
+    btRigidBody b(1, nullptr, &ball, inertia);
+    b.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 1, 0)));
+    b.setActivationState(DISABLE_DEACTIVATION);
+    world.addRigidBody(&g);
+    world.addRigidBody(&b);
+    for (int i = 0; i < 60; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), 0);
+    ck_assert(mkb::set_narrowphase(&world, mkb::Backend::minko));
+    for (int i = 0; i < 60; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), 1);
+    MK_ASSERT_NEAR(b.getWorldTransform().getOrigin().y(), 0.3, 5e-3);
+    ck_assert(mkb::set_narrowphase(&world, mkb::Backend::native));
+    for (int i = 0; i < 60; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), 1);
+    MK_ASSERT_NEAR(b.getWorldTransform().getOrigin().y(), 0.3, 5e-3);
+    // Not a Minko configuration: refused.
+    btDefaultCollisionConfiguration plain;
+    btCollisionDispatcher d2(&plain);
+    btCollisionWorld w2(&d2, &bp, &plain);
+    ck_assert(!mkb::set_narrowphase(&w2, mkb::Backend::minko));
+    world.removeRigidBody(&b);
+    world.removeRigidBody(&g);
+}
+END_TEST
+
 Suite *suite()
 {
     Suite *s = suite_create("minko_bullet");
@@ -358,6 +1019,21 @@ Suite *suite()
     tcase_add_test(w, writer_gone_new_and_callbacks);
     tcase_add_test(w, writer_mesh_parts_left_to_bullet);
     suite_add_tcase(s, w);
+    TCase *b = tcase_create("broadphase");
+    tcase_set_timeout(b, 60);
+    tcase_add_test(b, bp_pairs_exact_every_step);
+    tcase_add_test(b, bp_same_trajectories_as_bullet);
+    tcase_add_test(b, bp_proxy_removal_during_simulation);
+    tcase_add_test(b, bp_filtering);
+    tcase_add_test(b, bp_ray_and_sweep_hits_equal_native);
+    tcase_add_test(b, bp_bad_input_and_reset);
+    suite_add_tcase(s, b);
+    TCase *n = tcase_create("narrowphase");
+    tcase_set_timeout(n, 60);
+    tcase_add_test(n, np_conventions_match_bullet);
+    tcase_add_test(n, np_world_rests_on_minko_contacts);
+    tcase_add_test(n, np_switch_at_run_time);
+    suite_add_tcase(s, n);
     return s;
 }
 

@@ -1,17 +1,41 @@
 /* minko/manifold.h: contact manifolds with feature IDs.
  *
- * Contract. Feature IDs name the geometric feature of a shape that makes a
- * contact: its type (vertex, edge, face) and its index on that shape, packed
- * into 16 bits. Indices per shape type: box vertices 0..7 are the corner bits
- * zyx (bit set = +extent), box edges 0..11 are 4*axis + the corner bits of the
- * other two axes (low bit = the lower-numbered axis), box faces 0..5 are
- * 2*axis + (1 for the + side); hull vertices, faces and edges are the mk_hull
- * indices (an edge is named by the lower of its two half-edge indices);
- * spheres are vertex 0; capsule ends are vertices 0 (-h) and 1 (+h), its
- * segment edge 0; cylinder and cone caps are faces 0 (-h) and 1 (+h), the
- * side face 2, the rim of cap k edge k, the fixed rim points of cap k used for
- * flat contact vertices 4k..4k+3 (local angles 0, 90, 180, 270 degrees from
- * +x), the cone apex vertex 8; planes are face 0.
+ * Contract. mk_collide() returns, for one pair of shapes, the whole contact
+ * manifold in one call (no point-per-frame accumulation): up to
+ * MK_MANIFOLD_MAX_POINTS points sharing one unit normal that points from A
+ * towards B (world frame); per point the depth (> 0 penetration, 0 touching,
+ * < 0 separation), the witness points on both surfaces in world coordinates
+ * and in each body's local frame, with point_b = point_a - depth * normal, and
+ * the pair of features (one per shape) that makes the point. Points with
+ * depth >= -margin are reported; those with depth < 0 carry
+ * MK_CONTACT_SPECULATIVE. When more than four candidate points exist (clipped
+ * faces, cylinder rims) the deepest is kept first, then the points that
+ * maximise the contact area; the choice favours earlier candidates by a small
+ * margin so it does not flicker between frames. Feature IDs are stable while
+ * the same features touch, so a host can key its warm-start cache on them
+ * (minko/contact_cache.h). An optional caller-owned mk_manifold_cache per
+ * pair (zero-initialised = cold) carries the previous frame's separating
+ * axis, so the face/edge choice has hysteresis. Bad input (NULL, NaN/Inf,
+ * non-unit rotations, invalid shapes, a negative margin) returns a status
+ * and leaves *out untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing
+ * allocates; every query runs in A's local frame. Pairs available today:
+ * sphere, capsule and box among themselves except box-box, and sphere, box,
+ * capsule, cylinder and cone against a plane; the others (box-box and hulls
+ * through SAT, the remaining smooth pairs through GJK/EPA) return
+ * MK_ERR_UNSUPPORTED until those modules are in the library.
+ *
+ * Feature indices per shape type: box vertices 0..7 are the corner bits zyx
+ * (bit set = +extent), box edges 0..11 are 4*axis + the corner bits of the
+ * other two axes (bit 0 = the lower-numbered axis), box faces 0..5 are
+ * 2*axis + (1 for the + side); hull vertices and faces are the mk_hull
+ * indices, a hull edge is the lower of its two half-edge indices; a sphere is
+ * vertex 0; capsule ends are vertices 0 (-h) and 1 (+h), its segment edge 0;
+ * cylinder and cone: cap faces 0 (-h) and 1 (+h), side face 2; caps are
+ * clipped as octagons whose corners, the fixed rim points of cap k at local
+ * angles 0, 45, ..., 315 degrees from +x, are vertices 8k..8k+7 and whose
+ * chords from point j to j+1 are edges 2+8k+j; the rim of cap k, i.e. its
+ * exact support point when the cap is tilted, is edge k; the cone apex is
+ * vertex 16; a plane is face 0.
  */
 #ifndef MINKO_MANIFOLD_H
 #define MINKO_MANIFOLD_H
@@ -37,6 +61,42 @@ typedef uint16_t mk_feature;
 #define MK_FEATURE_GET_INDEX(f) ((int)((unsigned)(f) & MK_FEATURE_MAX_INDEX))
 /* The pair (feature of A, feature of B) as one 32-bit value: A low, B high. */
 #define MK_FEATURE_PAIR(fa, fb) ((uint32_t)(fa) | ((uint32_t)(fb) << 16))
+#define MK_FEATURE_PAIR_A(p) ((mk_feature)((p) & 0xFFFFu))
+#define MK_FEATURE_PAIR_B(p) ((mk_feature)((p) >> 16))
+
+#define MK_MANIFOLD_MAX_POINTS 4
+/* mk_contact_point.flags */
+#define MK_CONTACT_SPECULATIVE 1u
+
+typedef struct mk_contact_point {
+    mk_vec3 point_a;    /* on A's surface, world */
+    mk_vec3 point_b;    /* on B's surface, world: point_a - depth * normal */
+    mk_vec3 local_a;    /* point_a in A's local frame */
+    mk_vec3 local_b;    /* point_b in B's local frame */
+    mk_real depth;      /* > 0 penetration, < 0 separation */
+    uint32_t features;  /* MK_FEATURE_PAIR(feature of A, feature of B) */
+    uint32_t flags;     /* MK_CONTACT_SPECULATIVE when depth < 0 */
+} mk_contact_point;
+
+typedef struct mk_manifold {
+    mk_vec3 normal;     /* unit, world, from A towards B (undefined when count == 0) */
+    int count;          /* 0 .. MK_MANIFOLD_MAX_POINTS */
+    mk_contact_point points[MK_MANIFOLD_MAX_POINTS];
+} mk_manifold;
+
+/* Per-pair state carried from one frame to the next. Zero it (or pass NULL)
+ * for a cold start; keep one per body pair and pass the shapes in the same
+ * order every frame. */
+typedef struct mk_manifold_cache {
+    int kind;           /* internal: kind of the last separating axis, 0 = none */
+    int index_a;        /* internal: feature indices of that axis */
+    int index_b;
+} mk_manifold_cache;
+
+/* The contact manifold of shapes a (pose xa) and b (pose xb). `margin` >= 0:
+ * also report points separated by up to this distance (speculative). */
+MK_API mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb,
+                            mk_real margin, mk_manifold_cache *cache, mk_manifold *out);
 
 #ifdef __cplusplus
 }

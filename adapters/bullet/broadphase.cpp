@@ -1,0 +1,317 @@
+// broadphase.cpp: btBroadphaseInterface on a Minko broadphase (see minko_bullet.h).
+#include <algorithm>
+#include <cstdio>
+#include <new>
+
+#include "minko_bullet.h"
+
+namespace mkb {
+
+struct Broadphase::Proxy : public btBroadphaseProxy {
+    Proxy(const btVector3 &lo, const btVector3 &hi, void *user, int group, int mask)
+        : btBroadphaseProxy(lo, hi, user, group, mask) {}
+    mk_bp_id id = MK_BP_NULL_ID;
+    int index = -1;       // in m_proxies
+    bool is_static = false;
+    bool dirty = false;   // in m_dirty: Minko's structure may not know its box yet
+};
+
+namespace {
+
+mk_aabb to_aabb(const btVector3 &lo, const btVector3 &hi) { return mk_aabb_make(to_mk(lo), to_mk(hi)); }
+
+// Segment from + t (to - from), t in [0, 1], against [lo, hi]: closed slabs.
+bool segment_hits_box(const btVector3 &from, const btVector3 &to, const btVector3 &lo, const btVector3 &hi)
+{
+    btScalar t0 = 0, t1 = 1;
+    for (int k = 0; k < 3; k++) {
+        const btScalar d = to[k] - from[k];
+        if (d == 0) {
+            if (from[k] < lo[k] || from[k] > hi[k]) return false;
+            continue;
+        }
+        btScalar a = (lo[k] - from[k]) / d, b = (hi[k] - from[k]) / d;
+        if (a > b) std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+struct QueryCtx {
+    btBroadphaseAabbCallback *callback;
+};
+
+int aabb_visit(void *c, mk_bp_id, void *user)
+{
+    Broadphase::Proxy *p = static_cast<Broadphase::Proxy *>(user);
+    if (!p->dirty) static_cast<QueryCtx *>(c)->callback->process(p);
+    return 1;
+}
+
+struct RayCtx {
+    btBroadphaseRayCallback *callback;
+    bool stopped;
+};
+
+mk_real ray_visit(void *c, mk_bp_id, void *user, mk_real, mk_real max)
+{
+    Broadphase::Proxy *p = static_cast<Broadphase::Proxy *>(user);
+    RayCtx *r = static_cast<RayCtx *>(c);
+    if (p->dirty) return max;  // tested on its current box by rayTest itself
+    if (!r->callback->process(p)) {
+        r->stopped = true;
+        return -1;
+    }
+    return max;
+}
+
+}  // namespace
+
+Broadphase::Broadphase(mk_bp_kind kind, btHashedOverlappingPairCache *cache, int initial_capacity)
+    : m_kind(kind), m_capacity(std::max(initial_capacity, 16)), m_cache(cache), m_own_cache(cache == nullptr)
+{
+    if (m_own_cache) m_cache = new (btAlignedAlloc(sizeof(btHashedOverlappingPairCache), 16)) btHashedOverlappingPairCache();
+    note(rebuild(m_capacity));
+}
+
+Broadphase::~Broadphase()
+{
+    // The world normally destroyed every proxy already; free what is left.
+    for (Proxy *p : m_proxies) delete p;
+    mk_bp_destroy(m_bp);
+    if (m_own_cache) {
+        m_cache->~btHashedOverlappingPairCache();
+        btAlignedFree(m_cache);
+    }
+}
+
+// Two proxies whose group is StaticFilter (or 0) and whose masks exclude
+// StaticFilter never pass the AND test, so Minko may skip such pairs; with a
+// filter callback installed every candidate must be asked.
+bool Broadphase::may_be_minko_static(int group, int mask) const
+{
+    return (group & ~btBroadphaseProxy::StaticFilter) == 0 && (mask & btBroadphaseProxy::StaticFilter) == 0 &&
+           m_cache->getOverlapFilterCallback() == nullptr;
+}
+
+// (Re)creates the Minko broadphase with room for `capacity` proxies and files
+// every live proxy in it; the next update then reconciles the whole pair set.
+mk_status Broadphase::rebuild(int capacity)
+{
+    mk_bp_def def = mk_bp_default_def();
+    def.kind = m_kind;
+    def.proxy_capacity = capacity;
+    mk_bp *bp = nullptr;
+    mk_status st = mk_bp_create(&def, nullptr, &bp);
+    if (st != MK_OK) return st;
+    for (Proxy *p : m_proxies) {
+        p->is_static = may_be_minko_static(p->m_collisionFilterGroup, p->m_collisionFilterMask);
+        st = mk_bp_create_proxy(bp, to_aabb(p->m_aabbMin, p->m_aabbMax), p, 0, 0, p->is_static, &p->id);
+        if (st != MK_OK) {
+            mk_bp_destroy(bp);
+            return st;
+        }
+    }
+    mk_bp_destroy(m_bp);
+    m_bp = bp;
+    m_capacity = capacity;
+    m_filter_seen = m_cache->getOverlapFilterCallback();
+    m_reconcile = true;
+    // The new structure knows no box until its first update.
+    m_dirty = m_proxies;
+    for (Proxy *p : m_dirty) p->dirty = true;
+    return MK_OK;
+}
+
+btBroadphaseProxy *Broadphase::createProxy(const btVector3 &aabbMin, const btVector3 &aabbMax, int shapeType,
+                                           void *userPtr, int collisionFilterGroup, int collisionFilterMask,
+                                           btDispatcher *dispatcher)
+{
+    (void)shapeType;
+    (void)dispatcher;
+    if (!m_bp) return nullptr;
+    if ((int)m_proxies.size() >= m_capacity) {
+        mk_status st = rebuild(2 * m_capacity);
+        if (st != MK_OK) {
+            note(st);
+            return nullptr;
+        }
+    }
+    Proxy *p = new Proxy(aabbMin, aabbMax, userPtr, collisionFilterGroup, collisionFilterMask);
+    p->is_static = may_be_minko_static(collisionFilterGroup, collisionFilterMask);
+    mk_status st = mk_bp_create_proxy(m_bp, to_aabb(aabbMin, aabbMax), p, 0, 0, p->is_static, &p->id);
+    if (st != MK_OK) {
+        note(st);
+        delete p;
+        return nullptr;
+    }
+    p->m_uniqueId = ++m_uid;
+    p->index = (int)m_proxies.size();
+    m_proxies.push_back(p);
+    p->dirty = true;
+    m_dirty.push_back(p);
+    return p;
+}
+
+void Broadphase::destroyProxy(btBroadphaseProxy *proxy, btDispatcher *dispatcher)
+{
+    Proxy *p = static_cast<Proxy *>(proxy);
+    // Pairs first: the ghost pair callback still reads m_clientObject.
+    m_cache->removeOverlappingPairsContainingProxy(p, dispatcher);
+    note(mk_bp_destroy_proxy(m_bp, p->id));
+    Proxy *last = m_proxies.back();
+    m_proxies[p->index] = last;
+    last->index = p->index;
+    m_proxies.pop_back();
+    if (p->dirty) m_dirty.erase(std::find(m_dirty.begin(), m_dirty.end(), p));
+    delete p;
+}
+
+void Broadphase::setAabb(btBroadphaseProxy *proxy, const btVector3 &aabbMin, const btVector3 &aabbMax,
+                         btDispatcher *dispatcher)
+{
+    (void)dispatcher;
+    Proxy *p = static_cast<Proxy *>(proxy);
+    if (p->m_aabbMin == aabbMin && p->m_aabbMax == aabbMax) return;
+    mk_status st = mk_bp_move_proxy(m_bp, p->id, to_aabb(aabbMin, aabbMax));
+    if (st != MK_OK) {
+        note(st);
+        return;
+    }
+    p->m_aabbMin = aabbMin;
+    p->m_aabbMax = aabbMax;
+    if (!p->dirty) {
+        p->dirty = true;
+        m_dirty.push_back(p);
+    }
+}
+
+void Broadphase::getAabb(btBroadphaseProxy *proxy, btVector3 &aabbMin, btVector3 &aabbMax) const
+{
+    aabbMin = proxy->m_aabbMin;
+    aabbMax = proxy->m_aabbMax;
+}
+
+void Broadphase::calculateOverlappingPairs(btDispatcher *dispatcher)
+{
+    // A filter callback installed after static proxies were filed: file them
+    // again as ordinary proxies so the callback sees their pairs too.
+    if (m_cache->getOverlapFilterCallback() != m_filter_seen) {
+        mk_status st = rebuild(m_capacity);
+        if (st != MK_OK) note(st);
+    }
+    mk_status st = mk_bp_update(m_bp);
+    if (st != MK_OK) {
+        note(st);  // Minko stays valid; the next good update catches up
+        return;
+    }
+    for (Proxy *p : m_dirty) p->dirty = false;
+    m_dirty.clear();
+    if (m_reconcile) {
+        reconcile(dispatcher);
+        return;
+    }
+    int n = 0;
+    const mk_bp_pair *gone = mk_bp_removed(m_bp, &n);
+    for (int i = 0; i < n; i++) {
+        void *a = mk_bp_user(m_bp, gone[i].a), *b = mk_bp_user(m_bp, gone[i].b);
+        if (a && b) m_cache->removeOverlappingPair(static_cast<Proxy *>(a), static_cast<Proxy *>(b), dispatcher);
+    }
+    const mk_bp_pair *fresh = mk_bp_added(m_bp, &n);
+    for (int i = 0; i < n; i++) {
+        void *a = mk_bp_user(m_bp, fresh[i].a), *b = mk_bp_user(m_bp, fresh[i].b);
+        if (a && b) m_cache->addOverlappingPair(static_cast<Proxy *>(a), static_cast<Proxy *>(b));
+    }
+}
+
+// After a rebuild Minko's events start from an empty set: bring Bullet's cache
+// to Minko's whole set by mark and sweep. Existing pairs keep their algorithm
+// and are not filtered again.
+void Broadphase::reconcile(btDispatcher *dispatcher)
+{
+    struct Sweep : btOverlapCallback {
+        int frame;
+        bool processOverlap(btBroadphasePair &pair) override { return pair.m_internalTmpValue != frame; }
+    } sweep;
+    sweep.frame = ++m_frame;
+    int n = 0;
+    const mk_bp_pair *all = mk_bp_pairs(m_bp, &n);
+    for (int i = 0; i < n; i++) {
+        Proxy *a = static_cast<Proxy *>(mk_bp_user(m_bp, all[i].a)), *b = static_cast<Proxy *>(mk_bp_user(m_bp, all[i].b));
+        btBroadphasePair *pair = m_cache->findPair(a, b);
+        if (!pair) pair = m_cache->addOverlappingPair(a, b);
+        if (pair) pair->m_internalTmpValue = sweep.frame;
+    }
+    m_cache->processAllOverlappingPairs(&sweep, dispatcher);
+    m_reconcile = false;
+}
+
+void Broadphase::rayTest(const btVector3 &rayFrom, const btVector3 &rayTo, btBroadphaseRayCallback &rayCallback,
+                         const btVector3 &aabbMin, const btVector3 &aabbMax)
+{
+    // A proxy is hit when the segment meets its box grown by [-aabbMax, -aabbMin]
+    // (Dbvt's rule for convex sweeps); the swept box must hold the origin for
+    // Minko, and growing it to do so only over-reports, which Bullet allows.
+    const btVector3 zero(0, 0, 0);
+    btVector3 lo = aabbMin, hi = aabbMax;
+    lo.setMin(zero);
+    hi.setMax(zero);
+    mk_bp_ray ray;
+    ray.from = to_mk(rayFrom);
+    ray.to = to_mk(rayTo);
+    ray.box_lo = to_mk(lo);
+    ray.box_hi = to_mk(hi);
+    RayCtx ctx = {&rayCallback, false};
+    mk_status st = mk_bp_raycast(m_bp, &ray, ray_visit, &ctx);
+    if (st != MK_OK) note(st);
+    for (size_t i = 0; i < m_dirty.size() && !ctx.stopped; i++) {
+        Proxy *p = m_dirty[i];
+        if (segment_hits_box(rayFrom, rayTo, p->m_aabbMin - hi, p->m_aabbMax - lo) && !rayCallback.process(p))
+            ctx.stopped = true;
+    }
+}
+
+void Broadphase::aabbTest(const btVector3 &aabbMin, const btVector3 &aabbMax, btBroadphaseAabbCallback &callback)
+{
+    QueryCtx ctx = {&callback};
+    mk_status st = mk_bp_query_aabb(m_bp, to_aabb(aabbMin, aabbMax), aabb_visit, &ctx);
+    if (st != MK_OK) note(st);
+    for (Proxy *p : m_dirty)
+        if (TestAabbAgainstAabb2(aabbMin, aabbMax, p->m_aabbMin, p->m_aabbMax)) callback.process(p);
+}
+
+void Broadphase::getBroadphaseAabb(btVector3 &aabbMin, btVector3 &aabbMax) const
+{
+    aabbMin.setValue(BT_LARGE_FLOAT, BT_LARGE_FLOAT, BT_LARGE_FLOAT);
+    aabbMax.setValue(-BT_LARGE_FLOAT, -BT_LARGE_FLOAT, -BT_LARGE_FLOAT);
+    for (const Proxy *p : m_proxies) {
+        aabbMin.setMin(p->m_aabbMin);
+        aabbMax.setMax(p->m_aabbMax);
+    }
+}
+
+void Broadphase::resetPool(btDispatcher *dispatcher)
+{
+    (void)dispatcher;
+    if (m_proxies.empty()) m_uid = 0;
+}
+
+void Broadphase::printStats()
+{
+    mk_bp_stats s;
+    if (mk_bp_get_stats(m_bp, &s) != MK_OK) return;
+    std::printf("mkb::Broadphase: %s (asked %s), %d proxies (%d static), %d pairs, %d rebuilds, %lu bytes\n",
+                mk_bp_kind_name(s.kind), mk_bp_kind_name(s.requested), s.proxies, s.static_proxies, s.pairs,
+                s.full_rebuilds, (unsigned long)s.bytes);
+}
+
+mk_status Broadphase::take_error()
+{
+    mk_status st = m_error;
+    m_error = MK_OK;
+    return st;
+}
+
+}  // namespace mkb

@@ -1,0 +1,530 @@
+/* clip.c: support features, Sutherland-Hodgman clipping with feature
+ * bookkeeping, and manifold reduction (see manifold_internal.h). */
+#include "manifold_internal.h"
+
+#define V(i) MK_FEATURE(MK_FEATURE_VERTEX, i)
+#define E(i) MK_FEATURE(MK_FEATURE_EDGE, i)
+#define F(i) MK_FEATURE(MK_FEATURE_FACE, i)
+
+/* Cylinder and cone feature numbering (minko/manifold.h). */
+#define RIM_SAMPLES 8
+#define CONE_APEX 16
+#define SIDE_FACE 2
+#define CHORD_EDGE(cap, j) (2 + RIM_SAMPLES * (cap) + (j))
+
+void mk_mf_add(mk_mf *m, mk_vec3 pa, mk_real depth, mk_feature fa, mk_feature fb)
+{
+    if (!(depth >= -m->margin) || m->count >= MK_MF_MAX) return;
+    m->p[m->count].pa = pa;
+    m->p[m->count].depth = depth;
+    m->p[m->count].features = MK_FEATURE_PAIR(fa, fb);
+    m->count++;
+}
+
+/* ---- support features ---------------------------------------------------- */
+
+mk_feature mk_box_edge(int ci, int cj)
+{
+    int axis = (ci ^ cj) == 1 ? 0 : (ci ^ cj) == 2 ? 1 : 2;
+    int lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2; /* the other two axes, in order */
+    return E(4 * axis + ((ci >> lo) & 1) + 2 * ((ci >> hi) & 1));
+}
+
+static void box_face(const mk_shape *s, int axis, int positive, mk_feat *f)
+{
+    /* Corners of face +axis in counter-clockwise order around +e_axis: in the
+     * (b, c) plane with b = axis+1, c = axis+2 (cyclic), (-,-) (+,-) (+,+) (-,+). */
+    static const int bc[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    int b = (axis + 1) % 3, c = (axis + 2) % 3, i, corner[4];
+    mk_vec3 h = s->u.half_extents;
+    for (i = 0; i < 4; ++i) {
+        int k = positive ? i : 3 - i; /* reversed order keeps -axis faces counter-clockwise too */
+        corner[i] = (positive << axis) | (bc[k][0] << b) | (bc[k][1] << c);
+        f->v[i] = mk_v3(corner[i] & 1 ? h.x : -h.x, corner[i] & 2 ? h.y : -h.y, corner[i] & 4 ? h.z : -h.z);
+        f->vid[i] = V(corner[i]);
+    }
+    for (i = 0; i < 4; ++i) f->eid[i] = mk_box_edge(corner[i], corner[(i + 1) % 4]);
+    f->count = 4;
+    f->exact = 1;
+    f->id = F(2 * axis + positive);
+    f->normal = mk_v3(axis == 0 ? (positive ? 1 : -1) : 0, axis == 1 ? (positive ? 1 : -1) : 0, axis == 2 ? (positive ? 1 : -1) : 0);
+}
+
+/* Cap k (0: z = -h, 1: z = +h) of a cylinder or cone of radius r as a polygon
+ * of RIM_SAMPLES fixed rim points. When the cap is tilted against d, the
+ * exact rim support point replaces the nearest sample (keeping its id) if it
+ * is within about 0.8 degrees of it, else it is inserted on its chord: the
+ * deepest point is then exact, and the ids of a cap lying flat never depend
+ * on round-off. */
+static void cap_polygon(mk_real r, mk_real z, int cap, mk_vec3 d, mk_feat *f)
+{
+    static const mk_real c8[RIM_SAMPLES] = {1, MK_REAL(0.70710678118654752), 0, MK_REAL(-0.70710678118654752), -1,
+                                           MK_REAL(-0.70710678118654752), 0, MK_REAL(0.70710678118654752)};
+#define SIN8(j) c8[((j) + 6) % RIM_SAMPLES] /* sin(45 j) = cos(45 (j - 2)) */
+    mk_real sigma = mk_sqrt_(d.x * d.x + d.y * d.y);
+    int i, n = 0, replace = -1, chord = -1; /* chord j runs from sample j to sample j + 1 */
+    mk_vec3 x = mk_v3_zero();
+    if (sigma > MK_MF_SIN_TOL) {
+        mk_real ux = d.x / sigma, uy = d.y / sigma, best = -2;
+        int near = 0;
+        x = mk_v3(r * ux, r * uy, z);
+        for (i = 0; i < RIM_SAMPLES; ++i) {
+            mk_real dp = ux * c8[i] + uy * SIN8(i);
+            if (dp > best) { best = dp; near = i; }
+        }
+        if (best >= 1 - MK_REAL(1e-4)) replace = near;
+        else chord = c8[near] * uy - SIN8(near) * ux >= 0 ? near : (near + RIM_SAMPLES - 1) % RIM_SAMPLES;
+    }
+    for (i = 0; i < RIM_SAMPLES; ++i) {
+        /* Counter-clockwise around the outward normal: increasing angle on the top cap, decreasing below. */
+        int j = cap ? i : (RIM_SAMPLES - i) % RIM_SAMPLES;
+        int leaving = cap ? j : (j + RIM_SAMPLES - 1) % RIM_SAMPLES; /* chord from this vertex to the next */
+        f->v[n] = j == replace ? x : mk_v3(r * c8[j], r * SIN8(j), z);
+        f->vid[n] = V(RIM_SAMPLES * cap + j);
+        f->eid[n] = E(CHORD_EDGE(cap, leaving));
+        n++;
+        if (leaving == chord) { /* the piece of the chord after x is named by the rim */
+            f->v[n] = x;
+            f->vid[n] = E(cap);
+            f->eid[n] = E(cap);
+            n++;
+        }
+    }
+#undef SIN8
+    f->count = n;
+    f->exact = 0;
+    f->id = F(cap);
+    f->normal = mk_v3(0, 0, cap ? 1 : -1);
+}
+
+static void segment_feat(mk_vec3 p0, mk_feature f0, mk_vec3 p1, mk_feature f1, mk_feature e, mk_feat *f)
+{
+    f->count = 2;
+    f->exact = 1;
+    f->id = e;
+    f->normal = mk_v3_zero();
+    f->v[0] = p0;
+    f->v[1] = p1;
+    f->vid[0] = f0;
+    f->vid[1] = f1;
+    f->eid[0] = f->eid[1] = e;
+}
+
+static void point_feat(mk_vec3 p, mk_feature id, mk_feat *f)
+{
+    f->count = 1;
+    f->exact = 1;
+    f->id = id;
+    f->normal = mk_v3_zero();
+    f->v[0] = p;
+    f->vid[0] = id;
+    f->eid[0] = id;
+}
+
+void mk_support_feature(const mk_shape *s, mk_vec3 d, mk_feat *f)
+{
+    switch (s->type) {
+    case MK_SHAPE_BOX: {
+        mk_vec3 a = mk_v3_abs(d);
+        int axis = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2); /* ties go to the lower axis */
+        box_face(s, axis, (axis == 0 ? d.x : axis == 1 ? d.y : d.z) >= 0, f);
+        break;
+    }
+    case MK_SHAPE_CAPSULE:
+        segment_feat(mk_v3(0, 0, -s->u.capsule.half_height), V(0), mk_v3(0, 0, s->u.capsule.half_height), V(1), E(0), f);
+        break;
+    case MK_SHAPE_CYLINDER: {
+        mk_real r = s->u.cylinder.radius, h = s->u.cylinder.half_height, sigma = mk_sqrt_(d.x * d.x + d.y * d.y);
+        if (mk_fabs_(d.z) >= sigma) {
+            cap_polygon(r, d.z >= 0 ? h : -h, d.z >= 0, d, f);
+        } else {
+            mk_real cx = r * d.x / sigma, cy = r * d.y / sigma;
+            segment_feat(mk_v3(cx, cy, -h), E(0), mk_v3(cx, cy, h), E(1), F(SIDE_FACE), f);
+        }
+        break;
+    }
+    case MK_SHAPE_CONE: {
+        mk_real r = s->u.cone.radius, h = s->u.cone.half_height, sigma = mk_sqrt_(d.x * d.x + d.y * d.y);
+        /* Base cap (normal -z) against the side line at the angle of d (normal ~ (2h u, r)). */
+        mk_real side = (2 * h * sigma + r * d.z) / mk_sqrt_(4 * h * h + r * r);
+        if (-d.z >= side) {
+            cap_polygon(r, -h, 0, d, f);
+        } else if (sigma > 0) {
+            segment_feat(mk_v3(0, 0, h), V(CONE_APEX), mk_v3(r * d.x / sigma, r * d.y / sigma, -h), E(0), F(SIDE_FACE), f);
+        } else {
+            point_feat(mk_v3(0, 0, h), V(CONE_APEX), f);
+        }
+        break;
+    }
+    case MK_SHAPE_SPHERE:
+    default:
+        point_feat(mk_v3_zero(), V(0), f);
+        break;
+    }
+}
+
+void mk_feat_transform(mk_feat *f, const mk_rel *r)
+{
+    int i;
+    for (i = 0; i < f->count; ++i) f->v[i] = mk_v3_add(mk_mat3_mul_v3(r->R, f->v[i]), r->t);
+    f->normal = mk_mat3_mul_v3(r->R, f->normal);
+}
+
+/* ---- feature at a point --------------------------------------------------- */
+
+mk_feature mk_feature_at(const mk_shape *s, mk_vec3 p, mk_vec3 n)
+{
+    switch (s->type) {
+    case MK_SHAPE_BOX: {
+        mk_vec3 h = s->u.half_extents;
+        mk_real tol = mk_v3_max_abs(h) * MK_REAL_EPSILON * 64;
+        int at[3], count, i, corner = (p.x > 0) | (p.y > 0) << 1 | (p.z > 0) << 2;
+        at[0] = mk_fabs_(p.x) >= h.x - tol;
+        at[1] = mk_fabs_(p.y) >= h.y - tol;
+        at[2] = mk_fabs_(p.z) >= h.z - tol;
+        count = at[0] + at[1] + at[2];
+        if (count == 3) return V(corner);
+        if (count == 2) {
+            for (i = 0; at[i]; ++i) continue;
+            return mk_box_edge(corner & ~(1 << i), corner | (1 << i));
+        }
+        if (count == 1) {
+            for (i = 0; !at[i]; ++i) continue;
+            return F(2 * i + ((corner >> i) & 1));
+        }
+        {
+            mk_feat f; /* inside the core: the face the normal leaves through */
+            mk_support_feature(s, n, &f);
+            return f.id;
+        }
+    }
+    case MK_SHAPE_CAPSULE: {
+        mk_real h = s->u.capsule.half_height, tol = h * MK_REAL_EPSILON * 64;
+        return p.z >= h - tol ? V(1) : p.z <= -h + tol ? V(0) : E(0);
+    }
+    case MK_SHAPE_CYLINDER:
+    case MK_SHAPE_CONE: {
+        int cyl = s->type == MK_SHAPE_CYLINDER;
+        mk_real r = cyl ? s->u.cylinder.radius : s->u.cone.radius, h = cyl ? s->u.cylinder.half_height : s->u.cone.half_height;
+        mk_real tol = mk_max(r, h) * MK_REAL_EPSILON * 64, rho = mk_sqrt_(p.x * p.x + p.y * p.y);
+        int cap = p.z >= h - tol ? 1 : p.z <= -h + tol ? 0 : -1, rim;
+        if (!cyl) {
+            if (cap == 1) return V(CONE_APEX);
+            rim = rho >= r * (h - p.z) / (2 * h) - tol; /* on the lateral surface */
+        } else {
+            rim = rho >= r - tol;
+        }
+        if (cap >= 0 && rim) return E(cap);
+        return cap >= 0 ? F(cap) : F(SIDE_FACE);
+    }
+    case MK_SHAPE_SPHERE:
+    default:
+        return V(0);
+    }
+}
+
+/* ---- closest points of segments ------------------------------------------- */
+
+/* Ericson, Real-Time Collision Detection 5.1.9, with the degenerate cases
+ * (zero-length segments, parallel segments) resolved to a fixed choice. */
+void mk_segment_closest(mk_vec3 p0, mk_vec3 p1, mk_vec3 q0, mk_vec3 q1, mk_real *s_out, mk_real *t_out)
+{
+    mk_vec3 d1 = mk_v3_sub(p1, p0), d2 = mk_v3_sub(q1, q0), r = mk_v3_sub(p0, q0);
+    mk_real a = mk_v3_dot(d1, d1), e = mk_v3_dot(d2, d2), f = mk_v3_dot(d2, r), s, t;
+    if (a <= 0 && e <= 0) {
+        s = t = 0;
+    } else if (a <= 0) {
+        s = 0;
+        t = mk_clamp(f / e, 0, 1);
+    } else {
+        mk_real c = mk_v3_dot(d1, r);
+        if (e <= 0) {
+            t = 0;
+            s = mk_clamp(-c / a, 0, 1);
+        } else {
+            mk_real b = mk_v3_dot(d1, d2), denom = a * e - b * b;
+            /* Parallel: denom is 0 up to round-off; any s works, take the one for t's end nearest p0. */
+            s = denom > a * e * MK_REAL_EPSILON ? mk_clamp((b * f - c * e) / denom, 0, 1) : 0;
+            t = (b * s + f) / e;
+            if (t < 0) {
+                t = 0;
+                s = mk_clamp(-c / a, 0, 1);
+            } else if (t > 1) {
+                t = 1;
+                s = mk_clamp((b - c) / a, 0, 1);
+            }
+        }
+    }
+    *s_out = s;
+    *t_out = t;
+}
+
+/* ---- clipping --------------------------------------------------------------- */
+
+/* A side plane of the reference feature: x . n <= d keeps x. */
+typedef struct side_plane { mk_vec3 n; mk_real d; mk_feature id; } side_plane;
+
+static int side_planes(const mk_feat *ref, mk_vec3 n, side_plane *sp)
+{
+    int i;
+    if (ref->count == 2) {
+        /* The two end planes of a segment, perpendicular to it within the contact plane. */
+        mk_vec3 u = mk_v3_sub(ref->v[1], ref->v[0]);
+        u = mk_v3_normalize(mk_v3_mad(u, -mk_v3_dot(u, n), n));
+        sp[0].n = mk_v3_neg(u);
+        sp[0].d = -mk_v3_dot(u, ref->v[0]);
+        sp[0].id = ref->vid[0];
+        sp[1].n = u;
+        sp[1].d = mk_v3_dot(u, ref->v[1]);
+        sp[1].id = ref->vid[1];
+        return 2;
+    }
+    {
+        /* The prism swept by the polygon along n (not along its own normal: see mk_mf_clip). */
+        mk_vec3 c = mk_v3_zero();
+        for (i = 0; i < ref->count; ++i) c = mk_v3_add(c, ref->v[i]);
+        c = mk_v3_scale(c, 1 / (mk_real)ref->count);
+        for (i = 0; i < ref->count; ++i) {
+            mk_vec3 a = ref->v[i], b = ref->v[(i + 1) % ref->count];
+            mk_vec3 sn = mk_v3_normalize(mk_v3_cross(mk_v3_sub(b, a), n));
+            if (mk_v3_dot(sn, mk_v3_sub(c, a)) > 0) sn = mk_v3_neg(sn); /* outward, whatever the winding */
+            sp[i].n = sn;
+            sp[i].d = mk_v3_dot(sn, a);
+            sp[i].id = ref->eid[i];
+        }
+        return ref->count;
+    }
+}
+
+/* Appends the candidate for incident core point p with features (fref,
+ * finc). s is the core separation of p from the reference along n: to the
+ * face plane along the ray through p (a polygon), or from the reference
+ * segment's line (a segment, which may be tilted against n by the
+ * tolerance). */
+static void emit(mk_mf *m, const mk_feat *ref, int ref_is_a, mk_vec3 p, mk_feature fref, mk_feature finc, mk_real ra, mk_real rb)
+{
+    mk_vec3 n = m->normal, o = ref->v[0];
+    mk_real s;
+    if (ref->count == 2) {
+        mk_vec3 u = mk_v3_sub(ref->v[1], ref->v[0]);
+        mk_real uu = mk_v3_len2(u);
+        if (uu > 0) o = mk_v3_mad(o, mk_v3_dot(mk_v3_sub(p, o), u) / uu, u);
+        s = mk_v3_dot(mk_v3_sub(p, o), n);
+    } else {
+        s = mk_v3_dot(mk_v3_sub(p, o), ref->normal) / mk_v3_dot(n, ref->normal);
+    }
+    if (ref_is_a) {
+        mk_mf_add(m, mk_v3_mad(p, ra - s, n), ra + rb - s, fref, finc);
+    } else {
+        s = -s;
+        mk_mf_add(m, mk_v3_mad(p, ra, n), ra + rb - s, finc, fref);
+    }
+}
+
+/* Feature of the point where the incident edge tagged `tag` meets side plane q. */
+typedef struct clip_vert { mk_vec3 p; mk_feature fref, finc; int ref_edge; mk_feature edge; } clip_vert;
+
+static void crossing(const mk_feat *ref, const mk_feat *inc, int q, const side_plane *sp, const clip_vert *from, clip_vert *x)
+{
+    if (from->ref_edge < 0) {
+        x->fref = sp[q].id;
+        x->finc = from->edge;
+    } else {
+        /* Along reference edge p and now crossing plane q: the reference corner between them. */
+        int pe = from->ref_edge, n = ref->count;
+        x->fref = pe == (q + n - 1) % n ? ref->vid[q] : pe == (q + 1) % n ? ref->vid[(q + 1) % n] : ref->id;
+        x->finc = inc->id;
+    }
+}
+
+static int clip_polygon(const mk_feat *ref, const mk_feat *inc, const side_plane *sp, int nsp, clip_vert *out)
+{
+    clip_vert buf[2][MK_MF_MAX];
+    int n = inc->count, q, i, cur = 0;
+    for (i = 0; i < n; ++i) {
+        buf[0][i].p = inc->v[i];
+        buf[0][i].fref = ref->id;
+        buf[0][i].finc = inc->vid[i];
+        buf[0][i].ref_edge = -1; /* the edge leaving this vertex is incident edge eid[i] */
+        buf[0][i].edge = inc->eid[i];
+    }
+    for (q = 0; q < nsp && n > 0; ++q) {
+        clip_vert *src = buf[cur], *dst = buf[cur ^ 1];
+        int m = 0;
+        for (i = 0; i < n; ++i) {
+            const clip_vert *a = &src[i], *b = &src[(i + 1) % n];
+            mk_real da = mk_v3_dot(sp[q].n, a->p) - sp[q].d, db = mk_v3_dot(sp[q].n, b->p) - sp[q].d;
+            if (da <= 0) dst[m++] = *a;
+            if ((da <= 0) != (db <= 0) && m < MK_MF_MAX) {
+                clip_vert *x = &dst[m++];
+                x->p = mk_v3_lerp(a->p, b->p, da / (da - db));
+                crossing(ref, inc, q, sp, a, x);
+                if (da <= 0) { /* leaving: the next edge runs along plane q */
+                    x->ref_edge = q;
+                    x->edge = sp[q].id;
+                } else { /* entering: the rest of a's edge */
+                    x->ref_edge = a->ref_edge;
+                    x->edge = a->edge;
+                }
+            }
+        }
+        n = m;
+        cur ^= 1;
+    }
+    for (i = 0; i < n; ++i) out[i] = buf[cur][i];
+    return n;
+}
+
+static int clip_segment(const mk_feat *ref, const mk_feat *inc, const side_plane *sp, int nsp, clip_vert *out)
+{
+    int q, k;
+    out[0].p = inc->v[0];
+    out[1].p = inc->v[1];
+    out[0].fref = out[1].fref = ref->id;
+    out[0].finc = inc->vid[0];
+    out[1].finc = inc->vid[1];
+    for (q = 0; q < nsp; ++q) {
+        mk_real d0 = mk_v3_dot(sp[q].n, out[0].p) - sp[q].d, d1 = mk_v3_dot(sp[q].n, out[1].p) - sp[q].d;
+        if (d0 > 0 && d1 > 0) return 0;
+        if (d0 <= 0 && d1 <= 0) continue;
+        k = d0 > 0 ? 0 : 1;
+        out[k].p = mk_v3_lerp(out[0].p, out[1].p, d0 / (d0 - d1));
+        out[k].fref = sp[q].id;
+        out[k].finc = inc->eid[0];
+    }
+    return 2;
+}
+
+/* The clip prism and the depths follow the contact normal n rather than the
+ * reference face's own normal. When the two differ (n is within the face
+ * tolerance, but the closest points lie on the face's boundary), the witness
+ * pair then lies on the prism's boundary with its exact separation, and the
+ * separation along n is linear along every incident edge and never below the
+ * true one, so the deepest clipped point is exactly the deepest point. */
+void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, mk_real ra, mk_real rb)
+{
+    side_plane sp[MK_FEAT_MAX];
+    clip_vert out[MK_MF_MAX];
+    int nsp = side_planes(ref, m->normal, sp), n, i;
+    if (inc->count == 1) {
+        for (i = 0; i < nsp; ++i)
+            if (mk_v3_dot(sp[i].n, inc->v[0]) > sp[i].d) return;
+        emit(m, ref, ref_is_a, inc->v[0], ref->id, inc->vid[0], ra, rb);
+        return;
+    }
+    n = inc->count == 2 ? clip_segment(ref, inc, sp, nsp, out) : clip_polygon(ref, inc, sp, nsp, out);
+    for (i = 0; i < n; ++i) emit(m, ref, ref_is_a, out[i].p, out[i].fref, out[i].finc, ra, rb);
+}
+
+/* ---- manifold from closest points ------------------------------------------ */
+
+/* The segment of f that lies farthest along d and is perpendicular to d
+ * within the tolerance, if there is one. */
+static int support_segment(const mk_feat *f, mk_vec3 d, mk_feat *seg)
+{
+    int i;
+    if (f->count == 2) {
+        *seg = *f;
+    } else if (f->count > 2) {
+        mk_real best = -MK_REAL_MAX;
+        int k = 0;
+        for (i = 0; i < f->count; ++i) {
+            mk_real v = mk_v3_dot(d, f->v[i]) + mk_v3_dot(d, f->v[(i + 1) % f->count]);
+            if (v > best) { best = v; k = i; }
+        }
+        segment_feat(f->v[k], f->vid[k], f->v[(k + 1) % f->count], f->vid[(k + 1) % f->count], f->eid[k], seg);
+    } else {
+        return 0;
+    }
+    {
+        mk_vec3 u = mk_v3_sub(seg->v[1], seg->v[0]);
+        return mk_fabs_(mk_v3_dot(u, d)) <= MK_MF_SIN_TOL * mk_v3_len(u);
+    }
+}
+
+static int parallel(const mk_feat *sa, const mk_feat *sb)
+{
+    mk_vec3 ua = mk_v3_sub(sa->v[1], sa->v[0]), ub = mk_v3_sub(sb->v[1], sb->v[0]);
+    return mk_v3_len(mk_v3_cross(ua, ub)) <= MK_MF_SIN_TOL * mk_v3_len(ua) * mk_v3_len(ub);
+}
+
+void mk_mf_from_closest(mk_mf *m, const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_vec3 n, mk_vec3 ca,
+                        mk_vec3 cb, mk_real dist)
+{
+    mk_feat fa, fb, sa, sb;
+    mk_real ra = a->radius, rb = b->radius, cos_tol = mk_sqrt_(1 - MK_MF_SIN_TOL * MK_MF_SIN_TOL);
+    int a_ok, b_ok;
+    m->count = 0;
+    mk_support_feature(a, n, &fa);
+    mk_support_feature(b, mk_mat3_tmul_v3(r->R, mk_v3_neg(n)), &fb);
+    mk_feat_transform(&fb, r);
+    a_ok = fa.count > 2 && mk_v3_dot(fa.normal, n) >= cos_tol;
+    b_ok = fb.count > 2 && -mk_v3_dot(fb.normal, n) >= cos_tol;
+    if (a_ok && b_ok && fb.exact && !fa.exact) a_ok = 0; /* a true face beats a sampled cap */
+    m->normal = n;
+    if (a_ok) {
+        mk_mf_clip(m, &fa, 1, &fb, ra, rb);
+    } else if (b_ok) {
+        mk_mf_clip(m, &fb, 0, &fa, ra, rb);
+    } else if (support_segment(&fa, n, &sa) && support_segment(&fb, mk_v3_neg(n), &sb) && parallel(&sa, &sb)) {
+        mk_mf_clip(m, &sa, 1, &sb, ra, rb);
+    }
+    if (m->count == 0) {
+        /* Vertex contacts, crossing edges, or clipping lost the witness: the closest points themselves. */
+        mk_vec3 bl = mk_mat3_tmul_v3(r->R, mk_v3_sub(cb, r->t));
+        mk_mf_add(m, mk_v3_mad(ca, ra, n), ra + rb - dist, mk_feature_at(a, ca, n),
+                  mk_feature_at(b, bl, mk_mat3_tmul_v3(r->R, mk_v3_neg(n))));
+    }
+}
+
+/* ---- reduction ---------------------------------------------------------- */
+
+/* Scores below are compared with a bias: a later candidate must beat the
+ * current best by 5 % (depth: by 1e-4 of the patch size), so near-ties
+ * resolve to the earlier candidate, and candidate order comes from the
+ * features, which do not change between frames (Box3D uses the same idea). */
+#define REDUCE_BIAS MK_REAL(0.95)
+
+static mk_real area(mk_vec3 n, mk_vec3 a, mk_vec3 b, mk_vec3 c)
+{
+    return mk_v3_dot(mk_v3_cross(mk_v3_sub(b, a), mk_v3_sub(c, a)), n);
+}
+
+void mk_mf_reduce(mk_mf *m)
+{
+    mk_vec3 n = m->normal;
+    mk_real extent = 0, best, sign;
+    int i, k[4] = {0, -1, -1, -1}, count;
+    mk_mf_point keep[4];
+    if (m->count <= MK_MANIFOLD_MAX_POINTS) return;
+    for (i = 1; i < m->count; ++i) extent = mk_max(extent, mk_v3_max_abs(mk_v3_sub(m->p[i].pa, m->p[0].pa)));
+    for (i = 1; i < m->count; ++i)
+        if (m->p[i].depth > m->p[k[0]].depth + MK_REAL(1e-4) * extent) k[0] = i;
+    for (best = 0, i = 0; i < m->count; ++i) {
+        mk_vec3 d = mk_v3_sub(m->p[i].pa, m->p[k[0]].pa);
+        mk_real s = mk_v3_len2(mk_v3_mad(d, -mk_v3_dot(d, n), n));
+        if (s * REDUCE_BIAS * REDUCE_BIAS > best) { best = s; k[1] = i; }
+    }
+    if (k[1] < 0) k[1] = k[0] == 0 ? 1 : 0; /* all candidates coincide */
+    for (best = 0, i = 0; i < m->count; ++i) {
+        mk_real s = mk_fabs_(area(n, m->p[k[0]].pa, m->p[k[1]].pa, m->p[i].pa));
+        if (s * REDUCE_BIAS > best) { best = s; k[2] = i; }
+    }
+    count = 2;
+    if (k[2] >= 0) {
+        count = 3;
+        sign = area(n, m->p[k[0]].pa, m->p[k[1]].pa, m->p[k[2]].pa) > 0 ? 1 : -1;
+        for (best = 0, i = 0; i < m->count; ++i) {
+            /* How far outside the triangle's edges p lies: the area it adds to the patch. */
+            mk_vec3 p = m->p[i].pa;
+            mk_real s = -sign * area(n, m->p[k[0]].pa, m->p[k[1]].pa, p);
+            s = mk_max(s, -sign * area(n, m->p[k[1]].pa, m->p[k[2]].pa, p));
+            s = mk_max(s, -sign * area(n, m->p[k[2]].pa, m->p[k[0]].pa, p));
+            if (s * REDUCE_BIAS > best) { best = s; k[3] = i; }
+        }
+        if (k[3] >= 0) count = 4;
+    }
+    for (i = 0; i < count; ++i) keep[i] = m->p[k[i]];
+    for (i = 0; i < count; ++i) m->p[i] = keep[i];
+    m->count = count;
+}

@@ -1,0 +1,351 @@
+/* distance.c: public pair queries: validation, the dispatch table, GJK + EPA composition. */
+#include "closest.h"
+#ifndef MK_WITHOUT_EPA
+#  include "epa.h"
+#endif
+
+const char *mk_method_name(mk_method m)
+{
+    static const char *const names[] = {"none", "closed_form", "gjk", "epa", "sat"};
+    return (unsigned)m <= MK_METHOD_SAT ? names[m] : "unknown";
+}
+
+/* ---- dispatch ------------------------------------------------------------- */
+
+typedef enum path {
+    PATH_UNSUPPORTED = 0,
+    PATH_SPHERES,        /* closed form, world frame */
+    PATH_BOX_SPHERE,     /* closed form */
+    PATH_CAPSULE_SPHERE, /* closed form */
+    PATH_CAPSULES,       /* closed form: segment-segment */
+    PATH_PLANE,          /* closed form: support along the plane normal */
+    PATH_GJK             /* GJK on the cores, EPA when they overlap */
+} path;
+
+/* [type of A][type of B] -> method; `swap` runs it as (B, A) and flips the answer. */
+typedef struct route { unsigned char path, swap; } route;
+#define R_(p, s) {PATH_##p, s}
+static const route routes[MK_SHAPE_TYPE_COUNT][MK_SHAPE_TYPE_COUNT] = {
+    /*            sphere                    box                   capsule                  cylinder       cone           hull           plane */
+    /* sphere */ {R_(SPHERES, 0),          R_(BOX_SPHERE, 1),    R_(CAPSULE_SPHERE, 1),   R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
+    /* box    */ {R_(BOX_SPHERE, 0),       R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
+    /* capsule*/ {R_(CAPSULE_SPHERE, 0),   R_(GJK, 0),           R_(CAPSULES, 0),         R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
+    /* cyl.   */ {R_(GJK, 0),              R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
+    /* cone   */ {R_(GJK, 0),              R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
+    /* hull   */ {R_(GJK, 0),              R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
+    /* plane  */ {R_(PLANE, 1),            R_(PLANE, 1),         R_(PLANE, 1),            R_(PLANE, 1),  R_(PLANE, 1),  R_(PLANE, 1),  R_(UNSUPPORTED, 0)},
+};
+#undef R_
+
+/* ---- validation ----------------------------------------------------------- */
+
+/* Every query pays this, so the accepting path is short: v - v is 0 for a
+ * finite v and NaN otherwise, and a NaN or infinite quaternion fails the
+ * unit-length test, after which we only work out which error to name. A
+ * quaternion within MK_QUAT_TOLERANCE is accepted; paths that use it
+ * renormalise it (unit). */
+MK_ALWAYS_INLINE mk_status check_pose(mk_transform x)
+{
+    mk_quat q = x.q;
+    if ((x.p.x - x.p.x) + (x.p.y - x.p.y) + (x.p.z - x.p.z) != 0) return MK_ERR_NOT_FINITE;
+    if (mk_fabs_(mk_quat_len2(q) - 1) <= MK_QUAT_TOLERANCE) return MK_OK;
+    return mk_real_is_valid(q.x) && mk_real_is_valid(q.y) && mk_real_is_valid(q.z) && mk_real_is_valid(q.w)
+               ? MK_ERR_BAD_ROTATION
+               : MK_ERR_NOT_FINITE;
+}
+
+/* The closed forms' shapes, accepted without a call: exactly what
+ * mk_shape_validate accepts for them (sizes in (0, MK_MAX_SIZE], NaN fails
+ * every comparison); anything else goes to mk_shape_validate, which names the
+ * error and knows every other shape. */
+MK_ALWAYS_INLINE int primitive_ok(const mk_shape *s)
+{
+    mk_real r = s->radius;
+    switch (s->type) {
+    case MK_SHAPE_SPHERE: return r > 0 && r <= MK_MAX_SIZE;
+    case MK_SHAPE_CAPSULE: return r > 0 && r <= MK_MAX_SIZE && s->u.capsule.half_height > 0 && s->u.capsule.half_height <= MK_MAX_SIZE;
+    case MK_SHAPE_BOX: {
+        mk_vec3 h = s->u.half_extents;
+        return r >= 0 && r <= MK_MAX_SIZE && h.x > 0 && h.x <= MK_MAX_SIZE && h.y > 0 && h.y <= MK_MAX_SIZE && h.z > 0 &&
+               h.z <= MK_MAX_SIZE;
+    }
+    default: return 0;
+    }
+}
+
+MK_ALWAYS_INLINE mk_status check_inputs(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb,
+                                        const void *out)
+{
+    mk_status st;
+    if (!a || !b || !out) return MK_ERR_NULL;
+    if (!primitive_ok(a) && (st = mk_shape_validate(a)) != MK_OK) return st;
+    if (!primitive_ok(b) && (st = mk_shape_validate(b)) != MK_OK) return st;
+    if ((st = check_pose(xa)) != MK_OK) return st;
+    return check_pose(xb);
+}
+
+/* ---- the iterative path ----------------------------------------------------- */
+
+typedef struct answer {
+    mk_hit hit;         /* in the frame of the first shape as run */
+    int iterations;
+    mk_method method;
+    mk_solve_state state;
+} answer;
+
+#ifndef MK_WITHOUT_GJK
+static mk_hit grow_core(mk_vec3 a, mk_vec3 b, mk_real dc, mk_vec3 n, const mk_pair *p)
+{
+    mk_hit h;
+    h.distance = dc - p->a->radius - p->b->radius;
+    h.normal = n;
+    h.a = mk_v3_mad(a, p->a->radius, n);
+    h.b = mk_v3_mad(b, -p->b->radius, n);
+    return h;
+}
+
+static void weighted(const mk_cso_vertex *v, const mk_real *l, int n, mk_vec3 *a, mk_vec3 *b)
+{
+    int k;
+    *a = *b = mk_v3_zero();
+    for (k = 0; k < n; ++k) {
+        *a = mk_v3_mad(*a, l[k], v[k].a);
+        *b = mk_v3_mad(*b, l[k], v[k].b);
+    }
+}
+
+/* Witness points for a final distance d along n, centred on the solver's
+ * points pa, pb, so that b - a = d n holds to rounding. */
+static void witnesses(mk_vec3 pa, mk_vec3 pb, mk_real d, mk_vec3 n, mk_vec3 *a, mk_vec3 *b)
+{
+    mk_vec3 m = mk_v3_scale(mk_v3_add(pa, pb), MK_REAL(0.5));
+    *a = mk_v3_mad(m, -MK_REAL(0.5) * d, n);
+    *b = mk_v3_mad(m, MK_REAL(0.5) * d, n);
+}
+
+/* The reported distance is always sep(n) along the solver's final normal,
+ * evaluated with the support functions: an exact lower bound, equal to the
+ * distance at the optimum. For polytopes the final normal is the cross
+ * product of CSO vertex differences, which are the original feature edges
+ * (w1 - w0 = a1 - a0 when both share b), so distance and normal come out
+ * exact to rounding of the relative pose rather than to a solver tolerance. */
+static mk_status iterative(const mk_pair *p, mk_gjk_cache *cache, answer *ans)
+{
+    mk_gjk_result g;
+    mk_vec3 n, pa, pb;
+    mk_real sep;
+    mk_gjk(p, cache, 0, 0, &g);
+    ans->iterations = g.iterations;
+    ans->state = g.state;
+    if (!g.overlap) {
+        n = g.normal;
+        sep = g.lower;
+        if (!(sep > -(mk_real)HUGE_VAL)) { /* no lower bound at all (degenerate start): use |v| */
+            sep = g.upper;
+            n = mk_v3_len2(g.v) > 0 ? mk_v3_normalize(mk_v3_neg(g.v)) : mk_v3(1, 0, 0);
+        }
+        weighted(g.s.v, g.s.l, g.s.n, &pa, &pb);
+        ans->method = MK_METHOD_GJK;
+    } else {
+#ifdef MK_WITHOUT_EPA
+        return MK_ERR_UNSUPPORTED;
+#else
+        mk_epa_result e;
+        int ha = -1, hb = -1;
+        mk_epa(p, &g.s, g.scale, &e);
+        n = e.normal;
+        sep = mk_pair_separation(p, n, &ha, &hb);
+        weighted(e.face, e.l, 3, &pa, &pb);
+        ans->iterations += e.iterations;
+        if (e.state != MK_SOLVE_CONVERGED) ans->state = e.state;
+        ans->method = MK_METHOD_EPA;
+#endif
+    }
+    witnesses(pa, pb, sep, n, &pa, &pb);
+    ans->hit = grow_core(pa, pb, sep, n, p);
+    if (cache) mk_gjk_cache_store(&g.s, n, cache);
+    return MK_OK;
+}
+#endif
+
+/* ---- composition ---------------------------------------------------------- */
+
+/* Runs a path in the frame of its first shape: A's rotation goes to *ra for
+ * the way back (the identity for capsule paths, which run world-aligned about
+ * A's centre). Only what the path uses is computed: a sphere's rotation never
+ * matters, a capsule is its axis. */
+static mk_status run(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, path pth,
+                     mk_gjk_cache *cache, mk_mat3 *ra, answer *ans)
+{
+    mk_pair p;
+    mk_vec3 c = mk_v3_sub(xb.p, xa.p);
+    ans->iterations = 0;
+    ans->method = MK_METHOD_CLOSED_FORM;
+    ans->state = MK_SOLVE_CONVERGED;
+    switch (pth) {
+    case PATH_CAPSULE_SPHERE:
+        *ra = mk_mat3_identity();
+        ans->hit = mk_closest_capsule_sphere(a->u.capsule.half_height, mk_axis_of(xa.q), a->radius, c, b->radius);
+        return MK_OK;
+    case PATH_CAPSULES:
+        *ra = mk_mat3_identity();
+        ans->hit = mk_closest_capsule_capsule(a->u.capsule.half_height, mk_axis_of(xa.q), a->radius, c, mk_axis_of(xb.q),
+                                              b->u.capsule.half_height, b->radius);
+        return MK_OK;
+    case PATH_BOX_SPHERE:
+        *ra = mk_rotation_of(xa.q);
+        ans->hit = mk_closest_box_sphere(a->u.half_extents, a->radius, mk_mat3_tmul_v3(*ra, c), b->radius);
+        return MK_OK;
+    default: break;
+    }
+    *ra = mk_rotation_of(xa.q);
+    p = mk_pair_in(a, *ra, xa.p, b, xb);
+    switch (pth) {
+    case PATH_PLANE: ans->hit = mk_closest_shape_plane(&p); return MK_OK;
+    case PATH_GJK:
+#ifdef MK_WITHOUT_GJK
+        (void)cache;
+        return MK_ERR_UNSUPPORTED;
+#else
+        return iterative(&p, cache, ans);
+#endif
+    default: return MK_ERR_UNSUPPORTED;
+    }
+}
+
+/* Sphere pairs never build a frame: centres and radii only. */
+static void spheres(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_distance_result *r)
+{
+    mk_vec3 d = mk_v3_sub(xb.p, xa.p);
+    mk_real l = mk_v3_len(d);
+    /* Concentric spheres: every direction is a shortest way out; take +z. */
+    mk_vec3 n = l > 0 ? mk_v3_scale(d, 1 / l) : mk_v3(0, 0, 1);
+    r->distance = l - a->radius - b->radius;
+    r->normal = n;
+    r->point_a = mk_v3_mad(xa.p, a->radius, n);
+    r->point_b = mk_v3_mad(xb.p, -b->radius, n);
+    r->iterations = 0;
+    r->method = MK_METHOD_CLOSED_FORM;
+    r->state = MK_SOLVE_CONVERGED;
+}
+
+/* b is rebuilt from a, so point_b = point_a + distance * normal holds in the
+ * world frame to one rounding, and one rotation is saved. */
+static void to_world(const answer *ans, mk_mat3 ra, mk_vec3 pa, int flip, mk_distance_result *r)
+{
+    mk_vec3 n = mk_mat3_mul_v3(ra, ans->hit.normal), a = mk_v3_add(mk_mat3_mul_v3(ra, ans->hit.a), pa);
+    mk_vec3 b = mk_v3_mad(a, ans->hit.distance, n);
+    r->distance = ans->hit.distance;
+    r->normal = flip ? mk_v3_neg(n) : n;
+    r->point_a = flip ? b : a;
+    r->point_b = flip ? a : b;
+    r->iterations = ans->iterations;
+    r->method = ans->method;
+    r->state = ans->state;
+}
+
+mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
+                      mk_distance_result *out)
+{
+    mk_status st = check_inputs(a, xa, b, xb, out);
+    route rt;
+    answer ans;
+    mk_mat3 ra;
+    if (st != MK_OK) return st;
+    rt = routes[a->type][b->type];
+    if (rt.path == PATH_SPHERES) {
+        spheres(a, xa, b, xb, out);
+        return MK_OK;
+    }
+    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ra, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
+    if (st != MK_OK) return st;
+    to_world(&ans, ra, rt.swap ? xb.p : xa.p, rt.swap, out);
+    return MK_OK;
+}
+
+mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
+                     int *overlapping)
+{
+    mk_status st = check_inputs(a, xa, b, xb, overlapping);
+    route rt;
+    answer ans;
+    mk_mat3 ra;
+    if (st != MK_OK) return st;
+    rt = routes[a->type][b->type];
+    if (rt.path == PATH_SPHERES) {
+        mk_vec3 d = mk_v3_sub(xb.p, xa.p);
+        mk_real r = a->radius + b->radius;
+        *overlapping = mk_v3_len2(d) <= r * r;
+        return MK_OK;
+    }
+#ifndef MK_WITHOUT_GJK
+    if (rt.path == PATH_GJK) {
+        mk_pair p;
+        mk_gjk_result g;
+        p = mk_pair_make(a, xa, b, xb);
+        mk_gjk(&p, cache, 1, a->radius + b->radius, &g);
+        if (cache) mk_gjk_cache_store(&g.s, g.normal, cache);
+        *overlapping = g.overlap;
+        return MK_OK;
+    }
+#endif
+    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ra, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
+    if (st != MK_OK) return st;
+    *overlapping = ans.hit.distance <= 0;
+    return MK_OK;
+}
+
+/* ---- seed 003: approximate distance ---------------------------------------- */
+
+/* Core vertex nearest q (shape frame). Boxes and segments answer exactly; a
+ * hull walks downhill over its vertex graph from `start` (a local minimum of
+ * the distance, which is all the upper bound needs). */
+static int nearest_vertex(const mk_shape *s, mk_vec3 q, int start)
+{
+    switch (s->type) {
+    case MK_SHAPE_BOX: return (q.x >= 0 ? 1 : 0) | (q.y >= 0 ? 2 : 0) | (q.z >= 0 ? 4 : 0);
+    case MK_SHAPE_CAPSULE: return q.z >= 0 ? 1 : 0;
+    case MK_SHAPE_HULL: {
+        const mk_hull *h = s->u.hull;
+        int best = start, moved = 1;
+        mk_real bd = mk_v3_len2(mk_v3_sub(h->vertices[best], q));
+        while (moved) {
+            int e0 = h->vertex_edge[best], e = e0;
+            moved = 0;
+            do {
+                int w = h->edges[h->edges[e].twin].origin;
+                mk_real d = mk_v3_len2(mk_v3_sub(h->vertices[w], q));
+                if (d < bd) {
+                    best = w;
+                    bd = d;
+                    moved = 1;
+                    break;
+                }
+                e = h->edges[h->edges[e].twin].next;
+            } while (e != e0);
+        }
+        return best;
+    }
+    default: return 0;
+    }
+}
+
+mk_status mk_approx_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_real *out)
+{
+    mk_status st = check_inputs(a, xa, b, xb, out);
+    mk_pair p;
+    mk_vec3 va, vb;
+    int ia = -1, ib;
+    if (st != MK_OK) return st;
+    if (!mk_core_is_polytope(a) || !mk_core_is_polytope(b)) return MK_ERR_UNSUPPORTED;
+    p = mk_pair_make(a, xa, b, xb);
+    /* Start from A's vertex facing B rather than an arbitrary one: one support, a better bound. */
+    mk_core_support_inl(a, p.t, &ia);
+    va = mk_core_vertex(a, ia);
+    ib = nearest_vertex(b, mk_mat3_tmul_v3(p.r, mk_v3_sub(va, p.t)), 0);
+    vb = mk_v3_add(mk_mat3_mul_v3(p.r, mk_core_vertex(b, ib)), p.t);
+    ia = nearest_vertex(a, vb, ia);
+    va = mk_core_vertex(a, ia);
+    *out = mk_v3_dist(va, vb) - a->radius - b->radius;
+    return MK_OK;
+}

@@ -1,0 +1,291 @@
+/* epa.c: expanding polytope with silhouette removal, fixed capacity. */
+#include "epa.h"
+
+typedef struct epa_face {
+    int v[3];              /* counter-clockwise seen from outside */
+    int adj[3];            /* face across edge (v[i], v[i+1]) */
+    unsigned char edge[3]; /* index of that edge in the adjacent face */
+    unsigned char live;
+    mk_vec3 n;             /* unit outward normal */
+    mk_real dist;          /* n . (any vertex): distance of the plane from the origin */
+} epa_face;
+
+typedef struct epa_poly {
+    const mk_pair *p;
+    mk_real tol;           /* absolute rounding floor: MK_GJK_ABS_TOL * scale */
+    int nv, nf, nfree;
+    mk_cso_vertex v[MK_EPA_MAX_VERTICES];
+    epa_face f[MK_EPA_MAX_FACES];
+    int free_faces[MK_EPA_MAX_FACES];
+} epa_poly;
+
+/* Sets up face f over vertices (a, b, c); 0 if it is degenerate or has the
+ * origin clearly outside (an inverted face): the polytope would be invalid. */
+static int face_set(epa_poly *P, int f, int a, int b, int c)
+{
+    epa_face *F = &P->f[f];
+    mk_vec3 wa = P->v[a].w, wb = P->v[b].w, wc = P->v[c].w;
+    mk_vec3 n = mk_v3_cross(mk_v3_sub(wb, wa), mk_v3_sub(wc, wa));
+    mk_real l = mk_v3_len(n);
+    F->v[0] = a;
+    F->v[1] = b;
+    F->v[2] = c;
+    F->live = 1;
+    if (!(l > 0)) return 0;
+    F->n = mk_v3_scale(n, 1 / l);
+    /* The mean over the three vertices does not favour one of them. */
+    F->dist = (mk_v3_dot(F->n, wa) + mk_v3_dot(F->n, wb) + mk_v3_dot(F->n, wc)) / 3;
+    return F->dist >= -P->tol;
+}
+
+static int face_alloc(epa_poly *P)
+{
+    if (P->nfree > 0) return P->free_faces[--P->nfree];
+    return P->nf < MK_EPA_MAX_FACES ? P->nf++ : -1;
+}
+
+static void link(epa_poly *P, int f, int i, int g, int j)
+{
+    P->f[f].adj[i] = g;
+    P->f[f].edge[i] = (unsigned char)j;
+    P->f[g].adj[j] = f;
+    P->f[g].edge[j] = (unsigned char)i;
+}
+
+/* Adjacency by matching each directed edge with its reverse among faces [lo, hi). */
+static int link_all(epa_poly *P, int lo, int hi)
+{
+    int f, i, g, j;
+    for (f = lo; f < hi; ++f)
+        for (i = 0; i < 3; ++i) {
+            int a = P->f[f].v[i], b = P->f[f].v[(i + 1) % 3], found = 0;
+            for (g = lo; g < hi && !found; ++g)
+                for (j = 0; j < 3 && !found; ++j)
+                    if (P->f[g].v[j] == b && P->f[g].v[(j + 1) % 3] == a) {
+                        link(P, f, i, g, j);
+                        found = 1;
+                    }
+            if (!found) return 0;
+        }
+    return 1;
+}
+
+/* Adds the support point farthest from the affine hull of t[0..n) among
+ * the directions dirs; 0 if none leaves it by more than tol. */
+static int grow(const mk_pair *p, mk_cso_vertex *t, int n, const mk_vec3 *dirs, int nd, mk_real tol)
+{
+    mk_real best = tol;
+    int k, found = 0;
+    for (k = 0; k < nd; ++k) {
+        mk_cso_vertex w = mk_pair_support(p, dirs[k], t[0].ia, t[0].ib);
+        mk_vec3 r = mk_v3_sub(w.w, t[0].w);
+        mk_real off;
+        if (n == 1) {
+            off = mk_v3_len(r);
+        } else if (n == 2) {
+            mk_vec3 e = mk_v3_normalize(mk_v3_sub(t[1].w, t[0].w));
+            off = mk_v3_len(mk_v3_cross(r, e));
+        } else {
+            mk_vec3 m = mk_v3_normalize(mk_v3_cross(mk_v3_sub(t[1].w, t[0].w), mk_v3_sub(t[2].w, t[0].w)));
+            off = mk_fabs_(mk_v3_dot(r, m));
+        }
+        if (off > best) {
+            best = off;
+            t[n] = w;
+            found = 1;
+        }
+    }
+    return found;
+}
+
+/* GJK may stop on a point, segment or triangle through the origin (touching
+ * shapes); complete it to a tetrahedron with volume by supports along
+ * directions that leave its affine hull. */
+static int blow_up(const mk_pair *p, const mk_simplex *s, mk_real tol, mk_cso_vertex *t)
+{
+    int n = s->n, k;
+    for (k = 0; k < n; ++k) t[k] = s->v[k];
+    if (n == 1) {
+        const mk_vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        if (!grow(p, t, 1, axes, 6, tol)) return 0;
+        n = 2;
+    }
+    if (n == 2) {
+        mk_vec3 e = mk_v3_normalize(mk_v3_sub(t[1].w, t[0].w)), u = mk_v3_perp(e), v = mk_v3_cross(e, u), dirs[6];
+        dirs[0] = u;
+        dirs[1] = mk_v3_neg(u);
+        dirs[2] = v;
+        dirs[3] = mk_v3_neg(v);
+        dirs[4] = mk_v3_add(u, v);
+        dirs[5] = mk_v3_neg(dirs[4]);
+        if (!grow(p, t, 2, dirs, 6, tol)) return 0;
+        n = 3;
+    }
+    if (n == 3) {
+        mk_vec3 dirs[2];
+        dirs[0] = mk_v3_cross(mk_v3_sub(t[1].w, t[0].w), mk_v3_sub(t[2].w, t[0].w));
+        dirs[1] = mk_v3_neg(dirs[0]);
+        if (!grow(p, t, 3, dirs, 2, tol)) return 0;
+    }
+    return 1;
+}
+
+static int init_tetrahedron(epa_poly *P, const mk_cso_vertex *t)
+{
+    static const int faces[4][3] = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+    mk_vec3 e1 = mk_v3_sub(t[1].w, t[0].w), e2 = mk_v3_sub(t[2].w, t[0].w), e3 = mk_v3_sub(t[3].w, t[0].w);
+    int k, ok = 1;
+    P->nv = 4;
+    P->nf = 4;
+    P->nfree = 0;
+    for (k = 0; k < 4; ++k) P->v[k] = t[k];
+    /* Negative volume makes every face of `faces` point away from its opposite vertex. */
+    if (mk_v3_dot(e1, mk_v3_cross(e2, e3)) > 0) {
+        P->v[1] = t[2];
+        P->v[2] = t[1];
+    }
+    for (k = 0; k < 4; ++k) ok = face_set(P, k, faces[k][0], faces[k][1], faces[k][2]) && ok;
+    return ok && link_all(P, 0, 4);
+}
+
+static int nearest_face(const epa_poly *P)
+{
+    int f, best = -1;
+    for (f = 0; f < P->nf; ++f)
+        if (P->f[f].live && (best < 0 || P->f[f].dist < P->f[best].dist)) best = f;
+    return best;
+}
+
+static int known_vertex(const epa_poly *P, const mk_cso_vertex *w)
+{
+    int k;
+    if (w->ia < 0 || w->ib < 0) return 0;
+    for (k = 0; k < P->nv; ++k)
+        if (P->v[k].ia == w->ia && P->v[k].ib == w->ib) return 1;
+    return 0;
+}
+
+/* Removes every face vertex wi sees (flood fill from f0, which sees it) and
+ * fans the silhouette to wi. Returns 0 on a defect; the polytope is then
+ * abandoned, so partial updates do not matter. */
+static int expand(epa_poly *P, int f0, int wi)
+{
+    int stack_f[MK_EPA_MAX_FACES], stack_e[MK_EPA_MAX_FACES], removed[MK_EPA_MAX_FACES];
+    int hz_g[MK_EPA_MAX_FACES], hz_j[MK_EPA_MAX_FACES], hz_a[MK_EPA_MAX_FACES], hz_b[MK_EPA_MAX_FACES], nf_new[MK_EPA_MAX_FACES];
+    int sp = 0, nr = 0, nh = 0, k, m;
+    mk_vec3 w = P->v[wi].w;
+    P->f[f0].live = 0;
+    removed[nr++] = f0;
+    stack_f[sp] = f0;
+    stack_e[sp++] = 0;
+    while (sp > 0) {
+        int f = stack_f[sp - 1], i = stack_e[sp - 1], g, j;
+        if (i == 3) {
+            --sp;
+            continue;
+        }
+        stack_e[sp - 1] = i + 1;
+        g = P->f[f].adj[i];
+        j = P->f[f].edge[i];
+        if (!P->f[g].live) continue;
+        if (mk_v3_dot(P->f[g].n, w) - P->f[g].dist > P->tol) {
+            P->f[g].live = 0;
+            removed[nr++] = g;
+            stack_f[sp] = g;
+            stack_e[sp++] = 0;
+        } else {
+            hz_g[nh] = g;
+            hz_j[nh] = j;
+            hz_a[nh] = P->f[f].v[i];
+            hz_b[nh] = P->f[f].v[(i + 1) % 3];
+            nh++;
+        }
+    }
+    if (nh < 3) return 0;
+    for (k = 0; k < nr; ++k) P->free_faces[P->nfree++] = removed[k];
+    for (k = 0; k < nh; ++k) {
+        int f = face_alloc(P);
+        if (f < 0 || !face_set(P, f, hz_a[k], hz_b[k], wi)) return 0;
+        link(P, f, 0, hz_g[k], hz_j[k]);
+        nf_new[k] = f;
+    }
+    /* Close the fan: the face over (a, b) meets the face over (b, c) along (b, w). */
+    for (k = 0; k < nh; ++k) {
+        for (m = 0; m < nh && hz_a[m] != hz_b[k]; ++m) {}
+        if (m == nh) return 0;
+        link(P, nf_new[k], 1, nf_new[m], 2);
+    }
+    return 1;
+}
+
+/* Barycentric coordinates of the origin's projection on face f (clamped to it). */
+static void face_weights(const epa_poly *P, const epa_face *F, mk_real *l)
+{
+    mk_vec3 q = mk_v3_scale(F->n, F->dist);
+    mk_real sum = 0;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        mk_vec3 b = mk_v3_sub(P->v[F->v[(k + 1) % 3]].w, q), c = mk_v3_sub(P->v[F->v[(k + 2) % 3]].w, q);
+        l[k] = mk_max(0, mk_v3_dot(F->n, mk_v3_cross(b, c)));
+        sum += l[k];
+    }
+    for (k = 0; k < 3; ++k) l[k] = sum > 0 ? l[k] / sum : MK_REAL(1.0) / 3;
+}
+
+static void answer(const epa_poly *P, int f, mk_epa_result *out)
+{
+    const epa_face *F = &P->f[f];
+    int k;
+    for (k = 0; k < 3; ++k) out->face[k] = P->v[F->v[k]];
+    face_weights(P, F, out->l);
+    out->normal = F->n;
+    out->depth = F->dist;
+}
+
+/* No tetrahedron: the CSO is flat around the origin, so the shapes touch. */
+static int flat_answer(const mk_pair *p, const mk_simplex *s, mk_epa_result *out)
+{
+    int k;
+    mk_vec3 n = mk_v3_zero();
+    for (k = 0; k < 3; ++k) {
+        out->face[k] = s->v[k < s->n ? k : 0];
+        out->l[k] = k == 0 ? 1 : 0;
+    }
+    if (s->n >= 3) n = mk_v3_cross(mk_v3_sub(s->v[1].w, s->v[0].w), mk_v3_sub(s->v[2].w, s->v[0].w));
+    if (!(mk_v3_len2(n) > 0)) n = mk_v3_len2(p->t) > 0 ? p->t : mk_v3(1, 0, 0);
+    out->normal = mk_v3_normalize(n);
+    out->depth = 0;
+    out->iterations = 0;
+    out->state = MK_SOLVE_DEGENERATE;
+    return -1;
+}
+
+int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    epa_poly P;
+    mk_cso_vertex t[4];
+    int it;
+    P.p = p;
+    P.tol = MK_GJK_ABS_TOL * scale;
+    if (!blow_up(p, s, P.tol, t) || !init_tetrahedron(&P, t)) return flat_answer(p, s, out);
+    out->state = MK_SOLVE_MAX_ITERATIONS;
+    for (it = 0;; ++it) {
+        int f = nearest_face(&P);
+        const epa_face *F = &P.f[f];
+        mk_cso_vertex w;
+        answer(&P, f, out);
+        out->iterations = it + 1;
+        if (P.nv == MK_EPA_MAX_VERTICES) break;
+        w = mk_pair_support(p, F->n, P.v[F->v[0]].ia, P.v[F->v[0]].ib);
+        if (known_vertex(&P, &w) || mk_v3_dot(F->n, w.w) - F->dist <= MK_GJK_REL_TOL * F->dist + P.tol) {
+            out->state = MK_SOLVE_CONVERGED;
+            break;
+        }
+        P.v[P.nv] = w;
+        if (!expand(&P, f, P.nv++)) {
+            out->state = MK_SOLVE_DEGENERATE;
+            break;
+        }
+    }
+    return 0;
+}

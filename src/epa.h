@@ -1,0 +1,38 @@
+/* epa.h: expanding polytope algorithm for overlapping cores (internal).
+ *
+ * Starts from GJK's final simplex (which holds the origin, possibly on its
+ * boundary when the shapes touch), blows it up to a tetrahedron, then grows
+ * a convex polytope inside the CSO towards the boundary nearest the origin:
+ * each step adds the support point along the nearest face's normal, removes
+ * every face that point sees and closes the hole with a fan over the
+ * silhouette, so the polytope stays convex. Fixed capacity, all on the
+ * stack: no heap. Stops on a repeated support vertex (polytopes), on a gap
+ * below tolerance, on capacity, or on a defect (a degenerate or inverted new
+ * face, an unclosed silhouette); it then answers with the best face found
+ * before the defect, never NaN. A touching pair gives depth 0 with that
+ * face's normal. Complexity: O(k * F) for k iterations over at most F faces
+ * (linear scans; F <= MK_EPA_MAX_FACES), plus one support per iteration.
+ */
+#ifndef MINKO_EPA_H
+#define MINKO_EPA_H
+
+#include "gjk.h"
+
+#define MK_EPA_MAX_VERTICES 64
+#define MK_EPA_MAX_FACES (2 * MK_EPA_MAX_VERTICES)
+
+typedef struct mk_epa_result {
+    mk_cso_vertex face[3]; /* the polytope face nearest the origin */
+    mk_real l[3];          /* barycentric coordinates of the origin's projection on it */
+    mk_vec3 normal;        /* its unit outward normal: from A towards B */
+    mk_real depth;         /* its distance from the origin: a lower bound on the core penetration depth */
+    int iterations;
+    mk_solve_state state;
+} mk_epa_result;
+
+/* `s` is GJK's final simplex of an overlap (origin inside or on it), `scale`
+ * GJK's scale. Returns 0 on success, -1 if no tetrahedron with volume could be
+ * built around the origin (then *out holds a face of the simplex, depth 0). */
+int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out);
+
+#endif

@@ -1,0 +1,316 @@
+/* manifold.c: mk_collide: validation, pair dispatch, the closed-form pairs and
+ * the move from A's frame to world space (see minko/manifold.h).
+ *
+ * Every pair routine works in A's local frame and produces the core closest
+ * points (or, against a plane, the deepest core points directly); the
+ * manifold itself comes from the shared feature clipping in clip.c, so all
+ * pairs name their features the same way. Pairs are written for one order of
+ * shape types; the other order swaps the shapes and mirrors the result. */
+#include "manifold_internal.h"
+#include "shape_internal.h"
+
+typedef void (*pair_fn)(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache);
+
+/* ---- closed forms ----------------------------------------------------------- */
+
+static void sphere_sphere(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+{
+    mk_real d = mk_v3_len(r->t);
+    (void)cache;
+    if (d - a->radius - b->radius > m->margin) return;
+    /* Concentric spheres have no preferred direction; +z of A is as good as any and stays fixed. */
+    mk_mf_from_closest(m, a, b, r, d > 0 ? mk_v3_scale(r->t, 1 / d) : mk_v3(0, 0, 1), mk_v3_zero(), r->t, d);
+}
+
+static void capsule_sphere(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+{
+    mk_real h = a->u.capsule.half_height;
+    mk_vec3 c = r->t, q = mk_v3(0, 0, mk_clamp(c.z, -h, h)), diff = mk_v3_sub(c, q);
+    mk_real d = mk_v3_len(diff);
+    (void)cache;
+    if (d - a->radius - b->radius > m->margin) return;
+    mk_mf_from_closest(m, a, b, r, d > 0 ? mk_v3_scale(diff, 1 / d) : mk_v3(1, 0, 0), q, c, d);
+}
+
+static void box_sphere(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+{
+    mk_vec3 h = a->u.half_extents, c = r->t;
+    mk_vec3 q = mk_v3(mk_clamp(c.x, -h.x, h.x), mk_clamp(c.y, -h.y, h.y), mk_clamp(c.z, -h.z, h.z));
+    mk_vec3 diff = mk_v3_sub(c, q);
+    mk_real d = mk_v3_len(diff);
+    (void)cache;
+    if (d > 0) {
+        if (d - a->radius - b->radius > m->margin) return;
+        mk_mf_from_closest(m, a, b, r, mk_v3_scale(diff, 1 / d), q, c, d);
+    } else {
+        /* Centre inside the core: leave through the nearest face. */
+        mk_real gap[3];
+        int i;
+        mk_vec3 n = mk_v3_zero();
+        gap[0] = h.x - mk_fabs_(c.x);
+        gap[1] = h.y - mk_fabs_(c.y);
+        gap[2] = h.z - mk_fabs_(c.z);
+        i = (gap[0] <= gap[1] && gap[0] <= gap[2]) ? 0 : (gap[1] <= gap[2] ? 1 : 2);
+        if (i == 0) { n.x = c.x >= 0 ? 1 : -1; q.x = n.x * h.x; }
+        if (i == 1) { n.y = c.y >= 0 ? 1 : -1; q.y = n.y * h.y; }
+        if (i == 2) { n.z = c.z >= 0 ? 1 : -1; q.z = n.z * h.z; }
+        mk_mf_from_closest(m, a, b, r, n, q, c, -gap[i]);
+    }
+}
+
+static void capsule_ends(const mk_shape *s, const mk_rel *r, mk_vec3 *p0, mk_vec3 *p1)
+{
+    mk_vec3 axis = mk_v3_scale(r->R.c2, s->u.capsule.half_height);
+    *p0 = mk_v3_sub(r->t, axis);
+    *p1 = mk_v3_add(r->t, axis);
+}
+
+static void capsule_capsule(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+{
+    mk_real ha = a->u.capsule.half_height, s, t, d;
+    mk_vec3 a0 = mk_v3(0, 0, -ha), a1 = mk_v3(0, 0, ha), b0, b1, pa, pb, n;
+    (void)cache;
+    capsule_ends(b, r, &b0, &b1);
+    mk_segment_closest(a0, a1, b0, b1, &s, &t);
+    pa = mk_v3_lerp(a0, a1, s);
+    pb = mk_v3_lerp(b0, b1, t);
+    d = mk_v3_dist(pa, pb);
+    if (d - a->radius - b->radius > m->margin) return;
+    if (d > 0) {
+        n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
+    } else {
+        /* The axes cross: separate along their common normal, towards B's centre. */
+        n = mk_v3_normalize(mk_v3_cross(mk_v3(0, 0, 1), r->R.c2));
+        if (mk_v3_len2(n) == 0) n = mk_v3_normalize(mk_v3(r->t.x, r->t.y, 0));
+        if (mk_v3_len2(n) == 0) n = mk_v3(1, 0, 0);
+        if (mk_v3_dot(n, r->t) < 0) n = mk_v3_neg(n);
+    }
+    mk_mf_from_closest(m, a, b, r, n, pa, pb, d);
+}
+
+/* Liang-Barsky: does segment p0-p1 meet the box [-h, h]? */
+static int segment_meets_box(mk_vec3 p0, mk_vec3 p1, mk_vec3 h)
+{
+    mk_real lo = 0, hi = 1, P0[3], D[3], H[3];
+    int i;
+    P0[0] = p0.x; P0[1] = p0.y; P0[2] = p0.z;
+    D[0] = p1.x - p0.x; D[1] = p1.y - p0.y; D[2] = p1.z - p0.z;
+    H[0] = h.x; H[1] = h.y; H[2] = h.z;
+    for (i = 0; i < 3; ++i) {
+        if (D[i] == 0) {
+            if (mk_fabs_(P0[i]) > H[i]) return 0;
+        } else {
+            mk_real ta = (-H[i] - P0[i]) / D[i], tb = (H[i] - P0[i]) / D[i];
+            if (ta > tb) { mk_real tmp = ta; ta = tb; tb = tmp; }
+            lo = mk_max(lo, ta);
+            hi = mk_min(hi, tb);
+            if (lo > hi) return 0;
+        }
+    }
+    return 1;
+}
+
+static mk_vec3 box_corner(mk_vec3 h, int bits)
+{
+    return mk_v3(bits & 1 ? h.x : -h.x, bits & 2 ? h.y : -h.y, bits & 4 ? h.z : -h.z);
+}
+
+/* Closest points of a segment and a box it does not meet: an endpoint
+ * against the box, or the segment against one of the 12 edges (a face can
+ * only be nearest at an endpoint). */
+static mk_real segment_box_closest(mk_vec3 p0, mk_vec3 p1, mk_vec3 h, mk_vec3 *ca, mk_vec3 *cb)
+{
+    mk_real best = MK_REAL_MAX, s, t;
+    int i, k;
+    for (i = 0; i < 2; ++i) {
+        mk_vec3 p = i ? p1 : p0, q = mk_v3(mk_clamp(p.x, -h.x, h.x), mk_clamp(p.y, -h.y, h.y), mk_clamp(p.z, -h.z, h.z));
+        mk_real d2 = mk_v3_len2(mk_v3_sub(p, q));
+        if (d2 < best) { best = d2; *ca = q; *cb = p; }
+    }
+    for (k = 0; k < 3; ++k) {
+        for (i = 0; i < 4; ++i) {
+            /* Edge along axis k: the two corners that differ only in bit k. */
+            int lo = k == 0 ? 1 : 0, hi = k == 2 ? 1 : 2, bits = ((i & 1) << lo) | ((i >> 1) << hi);
+            mk_vec3 e0 = box_corner(h, bits), e1 = box_corner(h, bits | 1 << k), q, p;
+            mk_real d2;
+            mk_segment_closest(e0, e1, p0, p1, &s, &t);
+            q = mk_v3_lerp(e0, e1, s);
+            p = mk_v3_lerp(p0, p1, t);
+            d2 = mk_v3_len2(mk_v3_sub(p, q));
+            if (d2 < best) { best = d2; *ca = q; *cb = p; }
+        }
+    }
+    return mk_sqrt_(best);
+}
+
+/* Separation of the segment from the box along unit axis l (signed so that
+ * the result is the larger of the two sides); *nl is l or -l, from A to B. */
+static mk_real axis_separation(mk_vec3 l, mk_vec3 p0, mk_vec3 p1, mk_vec3 h, mk_vec3 *nl)
+{
+    mk_real rho = h.x * mk_fabs_(l.x) + h.y * mk_fabs_(l.y) + h.z * mk_fabs_(l.z);
+    mk_real a = mk_v3_dot(p0, l), b = mk_v3_dot(p1, l), pos = mk_min(a, b) - rho, neg = -rho - mk_max(a, b);
+    *nl = pos >= neg ? l : mk_v3_neg(l);
+    return mk_max(pos, neg);
+}
+
+/* The segment meets the box core: the axis of least penetration among the
+ * three face normals and the three edge-cross-segment directions. Face axes
+ * win ties so a capsule pressed into a face keeps a face contact. */
+static void segment_box_deep(mk_vec3 p0, mk_vec3 p1, mk_vec3 h, mk_vec3 *n, mk_vec3 *ca, mk_vec3 *cb, mk_real *dist)
+{
+    mk_vec3 u = mk_v3_normalize(mk_v3_sub(p1, p0)), l, best_n = mk_v3(1, 0, 0);
+    mk_real best = -MK_REAL_MAX, s, t, tol = mk_v3_max_abs(h) * MK_REAL_EPSILON * 64;
+    int k, edge = -1;
+    for (k = 0; k < 3; ++k) {
+        mk_vec3 nl;
+        mk_real sep = axis_separation(mk_v3(k == 0, k == 1, k == 2), p0, p1, h, &nl);
+        if (sep > best) { best = sep; best_n = nl; }
+    }
+    for (k = 0; k < 3; ++k) {
+        mk_vec3 nl;
+        mk_real sep;
+        l = mk_v3_cross(u, mk_v3(k == 0, k == 1, k == 2));
+        if (mk_v3_len(l) <= MK_MF_SIN_TOL) continue; /* segment parallel to this edge direction */
+        sep = axis_separation(mk_v3_normalize(l), p0, p1, h, &nl);
+        if (sep > best + tol) { best = sep; best_n = nl; edge = k; }
+    }
+    *n = best_n;
+    *dist = best;
+    if (edge < 0) {
+        *cb = mk_v3_dot(p0, best_n) <= mk_v3_dot(p1, best_n) ? p0 : p1;
+        *ca = mk_v3_mad(*cb, -best, best_n);
+    } else {
+        /* The box edge along `edge` on the side the normal points to. */
+        int bits = (best_n.x > 0) | (best_n.y > 0) << 1 | (best_n.z > 0) << 2;
+        mk_vec3 e0 = box_corner(h, bits & ~(1 << edge)), e1 = box_corner(h, bits | 1 << edge);
+        mk_segment_closest(e0, e1, p0, p1, &s, &t);
+        *ca = mk_v3_lerp(e0, e1, s);
+        *cb = mk_v3_lerp(p0, p1, t);
+    }
+}
+
+static void box_capsule(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+{
+    mk_vec3 h = a->u.half_extents, p0, p1, ca, cb, n;
+    mk_real d;
+    (void)cache;
+    capsule_ends(b, r, &p0, &p1);
+    if (segment_meets_box(p0, p1, h)) {
+        segment_box_deep(p0, p1, h, &n, &ca, &cb, &d);
+    } else {
+        d = segment_box_closest(p0, p1, h, &ca, &cb);
+        if (d - a->radius - b->radius > m->margin) return;
+        n = mk_v3_scale(mk_v3_sub(cb, ca), 1 / d);
+    }
+    mk_mf_from_closest(m, a, b, r, n, ca, cb, d);
+}
+
+/* Any shape A against the half-space B: the support feature of A's core
+ * along the inward plane normal holds every deepest point. */
+static void shape_plane(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+{
+    mk_vec3 np = mk_mat3_mul_v3(r->R, b->u.plane.normal);
+    mk_real off = b->u.plane.offset + mk_v3_dot(np, r->t);
+    mk_feat f;
+    int i;
+    (void)cache;
+    m->normal = mk_v3_neg(np);
+    mk_support_feature(a, m->normal, &f);
+    for (i = 0; i < f.count; ++i)
+        mk_mf_add(m, mk_v3_mad(f.v[i], a->radius, m->normal), a->radius - (mk_v3_dot(np, f.v[i]) - off), f.vid[i],
+                  MK_FEATURE(MK_FEATURE_FACE, 0));
+}
+
+/* ---- dispatch ------------------------------------------------------------- */
+
+static pair_fn pair_table(mk_shape_type ta, mk_shape_type tb)
+{
+    if (tb == MK_SHAPE_PLANE) return ta == MK_SHAPE_PLANE ? NULL : shape_plane;
+    switch (ta) {
+    case MK_SHAPE_SPHERE: return tb == MK_SHAPE_SPHERE ? sphere_sphere : NULL;
+    case MK_SHAPE_BOX: return tb == MK_SHAPE_SPHERE ? box_sphere : tb == MK_SHAPE_CAPSULE ? box_capsule : NULL;
+    case MK_SHAPE_CAPSULE: return tb == MK_SHAPE_SPHERE ? capsule_sphere : tb == MK_SHAPE_CAPSULE ? capsule_capsule : NULL;
+    default: return NULL;
+    }
+}
+
+static mk_status check_transform(mk_transform x)
+{
+    if (!mk_v3_is_valid(x.p) || !mk_real_is_valid(x.q.x + x.q.y + x.q.z + x.q.w)) return MK_ERR_NOT_FINITE;
+    return mk_quat_is_valid(x.q) ? MK_OK : MK_ERR_BAD_ROTATION;
+}
+
+/* Moves the reduced manifold from A's frame to world space; `swap` mirrors
+ * it when the pair routine ran with the shapes exchanged. */
+static void finish(const mk_mf *m, mk_transform xa, const mk_rel *r, int swap, mk_manifold *out)
+{
+    mk_vec3 n = mk_quat_rotate(xa.q, m->normal);
+    int i;
+    out->normal = swap ? mk_v3_neg(n) : n;
+    out->count = m->count;
+    for (i = 0; i < m->count; ++i) {
+        const mk_mf_point *p = &m->p[i];
+        mk_contact_point *c = &out->points[i];
+        mk_vec3 pb = mk_v3_mad(p->pa, -p->depth, m->normal);
+        mk_vec3 wa = mk_transform_point(xa, p->pa), wb = mk_transform_point(xa, pb);
+        mk_vec3 lb = mk_mat3_tmul_v3(r->R, mk_v3_sub(pb, r->t));
+        c->depth = p->depth;
+        c->flags = p->depth < 0 ? MK_CONTACT_SPECULATIVE : 0;
+        if (swap) {
+            c->point_a = wb;
+            c->point_b = wa;
+            c->local_a = lb;
+            c->local_b = p->pa;
+            c->features = MK_FEATURE_PAIR(MK_FEATURE_PAIR_B(p->features), MK_FEATURE_PAIR_A(p->features));
+        } else {
+            c->point_a = wa;
+            c->point_b = wb;
+            c->local_a = p->pa;
+            c->local_b = lb;
+            c->features = p->features;
+        }
+    }
+}
+
+mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_real margin,
+                     mk_manifold_cache *cache, mk_manifold *out)
+{
+    mk_status st;
+    pair_fn fn;
+    int swap = 0;
+    mk_rel r;
+    mk_mf m;
+    if (!a || !b || !out) return MK_ERR_NULL;
+    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
+    if ((st = check_transform(xa)) != MK_OK || (st = check_transform(xb)) != MK_OK) return st;
+    if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
+    if (margin < 0) return MK_ERR_BAD_ARGUMENT;
+    fn = pair_table(a->type, b->type);
+    if (!fn) {
+        fn = pair_table(b->type, a->type);
+        if (!fn) return MK_ERR_UNSUPPORTED;
+        swap = 1;
+    }
+    if (swap) {
+        const mk_shape *ts = a;
+        mk_transform tx = xa;
+        a = b;
+        b = ts;
+        xa = xb;
+        xb = tx;
+    }
+    xa.q = mk_quat_normalize(xa.q);
+    xb.q = mk_quat_normalize(xb.q);
+    {
+        mk_transform rel = mk_transform_inv_mul(xa, xb);
+        r.R = mk_mat3_from_quat(rel.q);
+        r.t = rel.p;
+    }
+    m.count = 0;
+    m.margin = margin;
+    m.normal = mk_v3(0, 0, 1);
+    fn(a, b, &r, &m, cache);
+    mk_mf_reduce(&m);
+    finish(&m, xa, &r, swap, out);
+    return MK_OK;
+}

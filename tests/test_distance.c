@@ -1,0 +1,599 @@
+/* test_distance.c: mk_distance / mk_overlap / mk_approx_distance: analytic
+ * answers for the closed forms, the dispatch table, symmetry, invariants,
+ * the regression cases other libraries shipped, and bad input. */
+#include <string.h>
+
+#include "minko/distance.h"
+#include "support/mk_test.h"
+
+#if defined(MK_SINGLE)
+#  define TOL 2e-5
+#  define NORMAL_TOL 1e-3
+#else
+#  define TOL 1e-12
+#  define NORMAL_TOL 1e-9
+#endif
+
+static mk_transform xf(mk_real x, mk_real y, mk_real z) { return mk_transform_make(mk_v3(x, y, z), mk_quat_identity()); }
+static mk_transform xfq(mk_vec3 p, mk_quat q) { return mk_transform_make(p, q); }
+
+/* The contract's invariants: unit normal, point_b = point_a + distance * normal. */
+static void check_invariants(const mk_distance_result *r, double scale)
+{
+    ck_assert(mk_real_is_valid(r->distance));
+    MK_ASSERT_NEAR(mk_v3_len(r->normal), 1, 8 * MK_REAL_EPSILON);
+    MK_ASSERT_V3_NEAR(r->point_b, mk_v3_mad(r->point_a, r->distance, r->normal), 64 * MK_REAL_EPSILON * scale);
+}
+
+static mk_distance_result dist_ok(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb)
+{
+    mk_distance_result r;
+    MK_ASSERT_STATUS(mk_distance(a, xa, b, xb, NULL, &r), MK_OK);
+    return r;
+}
+
+START_TEST(sphere_sphere_analytic)
+{
+    mk_shape a, b;
+    mk_distance_result r;
+    int ov;
+    mk_shape_sphere(1, &a);
+    mk_shape_sphere(0.5, &b);
+    r = dist_ok(&a, xf(1, 2, 3), &b, xf(1, 2 + 3, 3 + 4)); /* centres 5 apart */
+    MK_ASSERT_NEAR(r.distance, 3.5, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0.6, 0.8), TOL);
+    MK_ASSERT_V3_NEAR(r.point_a, mk_v3(1, 2.6, 3.8), 4 * TOL);
+    MK_ASSERT_V3_NEAR(r.point_b, mk_v3(1, 4.7, 6.6), 4 * TOL);
+    ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+    check_invariants(&r, 10);
+    r = dist_ok(&a, xf(0, 0, 0), &b, xf(0, 0, 1)); /* penetrating by 0.5 */
+    MK_ASSERT_NEAR(r.distance, -0.5, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), 0);
+    r = dist_ok(&a, xf(0, 0, 0), &b, xf(0, 0, 0)); /* concentric: documented +z */
+    MK_ASSERT_NEAR(r.distance, -1.5, 0);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), 0);
+    r = dist_ok(&a, xf(0, 0, 0), &b, xf(1.5, 0, 0)); /* touching exactly */
+    MK_ASSERT_NEAR(r.distance, 0, 0);
+    MK_ASSERT_STATUS(mk_overlap(&a, xf(0, 0, 0), &b, xf(1.5, 0, 0), NULL, &ov), MK_OK);
+    ck_assert_int_eq(ov, 1);
+    MK_ASSERT_STATUS(mk_overlap(&a, xf(0, 0, 0), &b, xf(1.5001, 0, 0), NULL, &ov), MK_OK);
+    ck_assert_int_eq(ov, 0);
+}
+END_TEST
+
+/* Far from the origin the query must not lose what the inputs carry: with
+ * both centres offset by 1e5 the difference of the positions is exact. */
+START_TEST(large_coordinates_keep_precision)
+{
+    mk_shape a, b;
+    mk_distance_result r;
+    mk_real off = (mk_real)1e5;
+    mk_shape_box(mk_v3(1, 1, 1), 0, &a);
+    mk_shape_sphere(0.5, &b);
+    r = dist_ok(&a, xf(off, off, off), &b, xf(off, off, off + MK_REAL(1.75)));
+    MK_ASSERT_NEAR(r.distance, 0.25, 1e5 * 4 * MK_REAL_EPSILON);
+    r = dist_ok(&b, xf(off, off, off + MK_REAL(1.75)), &a, xf(off, off, off));
+    MK_ASSERT_NEAR(r.distance, 0.25, 1e5 * 4 * MK_REAL_EPSILON);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, -1), 0);
+}
+END_TEST
+
+START_TEST(sphere_box_analytic)
+{
+    mk_shape box, rbox, s;
+    mk_distance_result r;
+    mk_quat q = mk_quat_from_axis_angle(mk_v3(0, 0, 1), MK_REAL(0.5));
+    mk_shape_box(mk_v3(1, 2, 3), 0, &box);
+    mk_shape_box(mk_v3(1, 2, 3), MK_REAL(0.25), &rbox);
+    mk_shape_sphere(0.5, &s);
+    /* face region */
+    r = dist_ok(&box, xf(0, 0, 0), &s, xf(3, 1, 1));
+    MK_ASSERT_NEAR(r.distance, 1.5, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(1, 0, 0), 0);
+    MK_ASSERT_V3_NEAR(r.point_a, mk_v3(1, 1, 1), TOL);
+    /* edge region: nearest point (1, 2, 0.5), offset (3, 4, 0) */
+    r = dist_ok(&box, xf(0, 0, 0), &s, xf(4, 6, 0.5));
+    MK_ASSERT_NEAR(r.distance, 4.5, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0.6, 0.8, 0), TOL);
+    /* corner region, rounded box: core corner (1,2,3), offset (2,3,6) of length 7 */
+    r = dist_ok(&rbox, xf(0, 0, 0), &s, xf(3, 5, 9));
+    MK_ASSERT_NEAR(r.distance, 7 - 0.25 - 0.5, TOL);
+    check_invariants(&r, 10);
+    /* centre inside the box: out through the nearest face (y: 2 - 1.5 = 0.5) */
+    r = dist_ok(&box, xf(0, 0, 0), &s, xf(0.2, -1.5, 0.1));
+    MK_ASSERT_NEAR(r.distance, -1.0, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, -1, 0), 0);
+    MK_ASSERT_V3_NEAR(r.point_a, mk_v3(0.2, -2, 0.1), TOL);
+    /* both argument orders; rotated box */
+    r = dist_ok(&s, xf(3, 1, 1), &box, xf(0, 0, 0));
+    MK_ASSERT_NEAR(r.distance, 1.5, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(-1, 0, 0), 0);
+    MK_ASSERT_V3_NEAR(r.point_b, mk_v3(1, 1, 1), TOL);
+    ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+    r = dist_ok(&box, xfq(mk_v3(10, 0, 0), q), &s, xfq(mk_v3_add(mk_v3(10, 0, 0), mk_quat_rotate(q, mk_v3(3, 1, 1))), q));
+    MK_ASSERT_NEAR(r.distance, 1.5, 8 * TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_quat_rotate(q, mk_v3(1, 0, 0)), 8 * TOL);
+}
+END_TEST
+
+START_TEST(capsule_analytic)
+{
+    mk_shape c1, c2, s;
+    mk_distance_result r;
+    mk_quat rx = mk_quat_from_axis_angle(mk_v3(1, 0, 0), MK_REAL(1.5707963267948966)); /* z axis -> -y */
+    mk_shape_capsule(0.5, 2, &c1);
+    mk_shape_capsule(0.25, 1, &c2);
+    mk_shape_sphere(1, &s);
+    /* parallel, side by side, overlapping spans: distance between axes 3 */
+    r = dist_ok(&c1, xf(0, 0, 0), &c2, xf(3, 0, 1));
+    MK_ASSERT_NEAR(r.distance, 2.25, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(1, 0, 0), TOL);
+    check_invariants(&r, 10);
+    /* parallel and collinear, end to end: gap 5 - 2 - 1 = 2 between segment ends */
+    r = dist_ok(&c1, xf(0, 0, 0), &c2, xf(0, 0, 5));
+    MK_ASSERT_NEAR(r.distance, 2 - 0.75, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), TOL);
+    /* crossing at right angles, 1.5 apart along x */
+    r = dist_ok(&c1, xf(0, 0, 0), &c2, xfq(mk_v3(1.5, 0, 0.5), rx));
+    MK_ASSERT_NEAR(r.distance, 1.5 - 0.75, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(1, 0, 0), TOL);
+    MK_ASSERT_V3_NEAR(r.point_a, mk_v3(0.5, 0, 0.5), TOL);
+    /* crossing cores (axes intersect): depth is the sum of radii, normal across both axes */
+    r = dist_ok(&c1, xf(0, 0, 0), &c2, xfq(mk_v3(0, 0, 0.5), rx));
+    MK_ASSERT_NEAR(r.distance, -0.75, TOL);
+    MK_ASSERT_NEAR(fabs((double)r.normal.x), 1, TOL);
+    check_invariants(&r, 10);
+    /* capsule-sphere both orders */
+    r = dist_ok(&c1, xf(0, 0, 0), &s, xf(0, 4, 1));
+    MK_ASSERT_NEAR(r.distance, 2.5, TOL);
+    r = dist_ok(&s, xf(0, 0, 4), &c1, xf(0, 0, 0));
+    MK_ASSERT_NEAR(r.distance, 0.5, TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, -1), 0);
+    ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+}
+END_TEST
+
+/* Every shape against a ground plane: the support along -n is exact, so the
+ * answers are analytic for any pose. */
+START_TEST(shapes_against_plane)
+{
+    mk_shape plane, s[6];
+    mk_quat q = mk_quat_from_axis_angle(mk_v3(1, 0, 0), MK_REAL(0.5));
+    mk_real c = (mk_real)cos(0.5), sn = (mk_real)sin(0.5);
+    mk_distance_result r;
+    int k, ov;
+    mk_shape_plane(mk_v3(0, 0, 1), 1, &plane); /* ground at z = 1, solid below */
+    mk_shape_sphere(0.5, &s[0]);
+    mk_shape_box(mk_v3(1, 2, 3), 0.1, &s[1]);
+    mk_shape_capsule(0.5, 2, &s[2]);
+    mk_shape_cylinder(1, 2, 0, &s[3]);
+    mk_shape_cone(1, 2, 0, &s[4]);
+    mk_shape_cylinder(1, 2, 0.2, &s[5]);
+    {
+        /* lowest point below the centre, analytic, for the tilted pose q (about x by 0.5 rad) */
+        mk_real low[6];
+        low[0] = 0.5;
+        low[1] = 2 * sn + 3 * c + 0.1;
+        low[2] = 2 * c + 0.5;
+        low[3] = 2 * c + 1 * sn;
+        low[4] = 2 * c + 1 * sn; /* base rim: the apex points up */
+        low[5] = 2 * c + 1 * sn + 0.2;
+        for (k = 0; k < 6; ++k) {
+            r = dist_ok(&s[k], xfq(mk_v3(3, 4, 10), q), &plane, xf(0, 0, 0));
+            MK_ASSERT_NEAR(r.distance, 10 - low[k] - 1, 16 * TOL);
+            MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, -1), 4 * MK_REAL_EPSILON);
+            MK_ASSERT_NEAR(r.point_b.z, 1, 16 * TOL);
+            ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+            check_invariants(&r, 10);
+            /* swapped, and sunk below the ground */
+            r = dist_ok(&plane, xf(0, 0, 0), &s[k], xfq(mk_v3(3, 4, 0.5), q));
+            MK_ASSERT_NEAR(r.distance, 0.5 - low[k] - 1, 16 * TOL);
+            MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), 4 * MK_REAL_EPSILON);
+            MK_ASSERT_NEAR(r.point_a.z, 1, 16 * TOL);
+            MK_ASSERT_STATUS(mk_overlap(&plane, xf(0, 0, 0), &s[k], xfq(mk_v3(3, 4, 0.5), q), NULL, &ov), MK_OK);
+            ck_assert_int_eq(ov, 1);
+        }
+    }
+    /* a moved, tilted plane: n = (sin 0.5, 0, cos 0.5), offset 1 from (0, 0, 5):
+     * the solid is n.x <= 5 cos 0.5 + 1, so the sphere at the origin is inside it */
+    r = dist_ok(&s[0], xf(0, 0, 0), &plane, xfq(mk_v3(0, 0, 5), mk_quat_from_axis_angle(mk_v3(0, 1, 0), MK_REAL(0.5))));
+    MK_ASSERT_NEAR(r.distance, -(5 * c + 1) - 0.5, 16 * TOL);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(-sn, 0, -c), 4 * MK_REAL_EPSILON);
+    MK_ASSERT_STATUS(mk_distance(&plane, xf(0, 0, 0), &plane, xf(0, 0, 1), NULL, &r), MK_ERR_UNSUPPORTED);
+}
+END_TEST
+
+/* ---- box-box against an independent brute force --------------------------
+ * Distance: min over vertex-box and edge-edge pairs; depth: SAT over the 15
+ * axes. Written from the definitions, sharing no code with the library. */
+
+typedef struct obox { mk_vec3 c, ax[3], h; } obox;
+
+static obox make_obox(mk_vec3 h, mk_transform x)
+{
+    obox b;
+    mk_mat3 m = mk_mat3_from_quat(mk_quat_normalize(x.q));
+    b.c = x.p;
+    b.ax[0] = m.c0;
+    b.ax[1] = m.c1;
+    b.ax[2] = m.c2;
+    b.h = h;
+    return b;
+}
+
+static mk_real hv(mk_vec3 h, int i) { return i == 0 ? h.x : (i == 1 ? h.y : h.z); }
+
+static mk_vec3 corner(const obox *b, int k)
+{
+    mk_vec3 p = b->c;
+    int i;
+    for (i = 0; i < 3; ++i) p = mk_v3_mad(p, (k >> i & 1) ? hv(b->h, i) : -hv(b->h, i), b->ax[i]);
+    return p;
+}
+
+static double point_box(const obox *b, mk_vec3 p)
+{
+    double s = 0;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        double u = (double)mk_v3_dot(mk_v3_sub(p, b->c), b->ax[i]), e = (double)hv(b->h, i);
+        double o = fabs(u) - e;
+        if (o > 0) s += o * o;
+    }
+    return sqrt(s);
+}
+
+static double point_segment(mk_vec3 p, mk_vec3 a, mk_vec3 b)
+{
+    mk_vec3 u = mk_v3_sub(b, a);
+    double t = (double)mk_v3_dot(mk_v3_sub(p, a), u) / (double)mk_v3_len2(u);
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    return (double)mk_v3_len(mk_v3_sub(p, mk_v3_mad(a, (mk_real)t, u)));
+}
+
+static double segment_segment(mk_vec3 p0, mk_vec3 p1, mk_vec3 q0, mk_vec3 q1)
+{
+    double best = point_segment(p0, q0, q1), d;
+    mk_vec3 n = mk_v3_cross(mk_v3_sub(p1, p0), mk_v3_sub(q1, q0));
+    if ((d = point_segment(p1, q0, q1)) < best) best = d;
+    if ((d = point_segment(q0, p0, p1)) < best) best = d;
+    if ((d = point_segment(q1, p0, p1)) < best) best = d;
+    if (mk_v3_len2(n) > 0) {
+        /* interior-interior: the common perpendicular, if its feet are inside both segments */
+        mk_vec3 u = mk_v3_sub(p1, p0), v = mk_v3_sub(q1, q0), r = mk_v3_sub(q0, p0);
+        double nn = (double)mk_v3_len2(n);
+        double s = (double)mk_v3_dot(mk_v3_cross(r, v), n) / nn, t = (double)mk_v3_dot(mk_v3_cross(r, u), n) / nn;
+        if (s > 0 && s < 1 && t > 0 && t < 1) {
+            d = fabs((double)mk_v3_dot(r, n)) / sqrt(nn);
+            if (d < best) best = d;
+        }
+    }
+    return best;
+}
+
+static double box_box_oracle(const obox *a, const obox *b)
+{
+    static const int edges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+    double depth = HUGE_VAL, best = HUGE_VAL, d;
+    int i, j, separated = 0;
+    mk_vec3 axes[15], dc = mk_v3_sub(b->c, a->c);
+    int na = 0;
+    for (i = 0; i < 3; ++i) {
+        axes[na++] = a->ax[i];
+        axes[na++] = b->ax[i];
+    }
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) {
+            mk_vec3 c = mk_v3_cross(a->ax[i], b->ax[j]);
+            if (mk_v3_len2(c) > 1e-12) axes[na++] = mk_v3_normalize(c);
+        }
+    for (i = 0; i < na; ++i) {
+        double ra = 0, rb = 0, o;
+        for (j = 0; j < 3; ++j) {
+            ra += (double)hv(a->h, j) * fabs((double)mk_v3_dot(axes[i], a->ax[j]));
+            rb += (double)hv(b->h, j) * fabs((double)mk_v3_dot(axes[i], b->ax[j]));
+        }
+        o = ra + rb - fabs((double)mk_v3_dot(axes[i], dc));
+        if (o < 0) separated = 1;
+        if (o < depth) depth = o;
+    }
+    if (!separated) return -depth;
+    for (i = 0; i < 8; ++i) {
+        if ((d = point_box(b, corner(a, i))) < best) best = d;
+        if ((d = point_box(a, corner(b, i))) < best) best = d;
+    }
+    for (i = 0; i < 12; ++i)
+        for (j = 0; j < 12; ++j) {
+            d = segment_segment(corner(a, edges[i][0]), corner(a, edges[i][1]), corner(b, edges[j][0]), corner(b, edges[j][1]));
+            if (d < best) best = d;
+        }
+    return best;
+}
+
+/* Random box pairs at a given scale and offset, separated and penetrating;
+ * every answer against the oracle, both argument orders, overlap agreeing. */
+static void box_family(uint64_t seed, mk_vec3 ha_shape, mk_vec3 hb_shape, double size, double offset, double rel_tol)
+{
+    mk_rng rng = {seed};
+    mk_shape a, b;
+    int i;
+    /* rounding scales with the largest extent in the pair, not the nominal size */
+    double extent = size * fmax((double)mk_v3_max_abs(ha_shape), (double)mk_v3_max_abs(hb_shape));
+    mk_shape_box(mk_v3_scale(ha_shape, (mk_real)size), 0, &a);
+    mk_shape_box(mk_v3_scale(hb_shape, (mk_real)size), 0, &b);
+    for (i = 0; i < 200; ++i) {
+        mk_vec3 off = mk_v3((mk_real)offset, (mk_real)offset, (mk_real)offset);
+        mk_transform xa = xfq(mk_v3_add(off, mk_rng_v3(&rng, -0.5 * size, 0.5 * size)), mk_rng_quat(&rng));
+        mk_transform xb = xfq(mk_v3_add(off, mk_rng_v3(&rng, -2 * size, 2 * size)), mk_rng_quat(&rng));
+        obox oa = make_obox(a.u.half_extents, xa), ob = make_obox(b.u.half_extents, xb);
+        double want = box_box_oracle(&oa, &ob), tol = rel_tol * extent;
+        mk_distance_result r, s;
+        int ov;
+        r = dist_ok(&a, xa, &b, xb);
+        ck_assert_msg(fabs((double)r.distance - want) <= tol, "seed %llu case %d: got %.17g want %.17g (method %s)",
+                      (unsigned long long)seed, i, (double)r.distance, want, mk_method_name(r.method));
+        check_invariants(&r, extent + offset);
+        s = dist_ok(&b, xb, &a, xa);
+        MK_ASSERT_NEAR(s.distance, r.distance, tol);
+        MK_ASSERT_V3_NEAR(s.normal, mk_v3_neg(r.normal), NORMAL_TOL);
+        MK_ASSERT_STATUS(mk_overlap(&a, xa, &b, xb, NULL, &ov), MK_OK);
+        if (fabs(want) > tol) ck_assert_int_eq(ov, want <= 0);
+    }
+}
+
+START_TEST(box_box_against_oracle)
+{
+#if defined(MK_SINGLE)
+    const double rel = 2e-5;
+#else
+    const double rel = 1e-11;
+#endif
+    box_family(11, mk_v3(1, 1, 1), mk_v3(1, 1, 1), 1, 0, rel);
+    box_family(12, mk_v3(1, 0.5, 0.25), mk_v3(0.3, 1, 0.7), 1, 0, rel);
+    box_family(13, mk_v3(1, 1, 1e-3), mk_v3(1, 1, 1e-3), 1, 0, rel);   /* flat boxes */
+    box_family(14, mk_v3(50, 5e-3, 5e-3), mk_v3(1, 1, 1), 1, 0, rel);  /* thin rods */
+    box_family(15, mk_v3(1, 1, 1), mk_v3(0.5, 0.7, 0.9), 1e-3, 0, rel); /* tiny objects */
+#if !defined(MK_SINGLE)
+    box_family(16, mk_v3(1, 1, 1), mk_v3(0.5, 0.7, 0.9), 1, 1e5, 1e-10); /* large coordinates */
+#endif
+}
+END_TEST
+
+/* ---- regression cases from other libraries' bug trackers ---------------- */
+
+/* libccd #25: two 2 m cubes stacked at z = 0 and z = 1.9. Face-aligned boxes
+ * give GJK a degenerate (coplanar) simplex and libccd's EPA started from it
+ * and returned depth 0 with a NaN direction. The answer is depth 0.1 along z. */
+START_TEST(regression_stacked_cubes)
+{
+    mk_shape a;
+    mk_distance_result r;
+    mk_shape_box(mk_v3(1, 1, 1), 0, &a);
+    r = dist_ok(&a, xf(0, 0, 0), &a, xf(0, 0, MK_REAL(1.9)));
+    MK_ASSERT_NEAR(r.distance, MK_REAL(1.9) - 2, 4 * MK_REAL_EPSILON);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), 0);
+    check_invariants(&r, 2);
+}
+END_TEST
+
+/* libccd #17: a 5 m box against a 0.2 m box: the contact location was wrong
+ * because the scale disparity skewed the barycentric solve. The small box
+ * rests 0.05 m into the big one's top face; the witness on the big box must
+ * lie on that face, under the small box. */
+START_TEST(regression_size_disparity)
+{
+    mk_shape big, small;
+    mk_distance_result r;
+    mk_shape_box(mk_v3(2.5, 2.5, 2.5), 0, &big);
+    mk_shape_box(mk_v3(0.1, 0.1, 0.1), 0, &small);
+    r = dist_ok(&big, xf(0, 0, 0), &small, xf(1, -2, MK_REAL(2.55)));
+    MK_ASSERT_NEAR(r.distance, -0.05, 16 * MK_REAL_EPSILON * 5);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), 0);
+    MK_ASSERT_NEAR(r.point_a.z, 2.5, 16 * MK_REAL_EPSILON * 5);
+    ck_assert(fabs((double)r.point_a.x - 1) <= 0.1 && fabs((double)r.point_a.y + 2) <= 0.1);
+    r = dist_ok(&small, xf(1, -2, MK_REAL(2.55)), &big, xf(0, 0, 0));
+    MK_ASSERT_NEAR(r.distance, -0.05, 16 * MK_REAL_EPSILON * 5);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, -1), 0);
+}
+END_TEST
+
+/* libccd #68: boxes that touch exactly (face to face, edge to edge, corner to
+ * face). The origin then lies on the CSO boundary, GJK's simplex is flat and
+ * EPA's polytope has zero volume; libccd took sqrt of a zero distance into a
+ * NaN direction. The answer is distance 0 with the face normal. */
+START_TEST(regression_touching_boxes)
+{
+    mk_shape a;
+    mk_distance_result r;
+    int ov;
+    mk_quat z45 = mk_quat_from_axis_angle(mk_v3(0, 0, 1), MK_REAL(0.78539816339744831));
+    mk_shape_box(mk_v3(1, 1, 1), 0, &a);
+    r = dist_ok(&a, xf(0, 0, 0), &a, xf(0.5, 0.25, 2));
+    MK_ASSERT_NEAR(r.distance, 0, 4 * MK_REAL_EPSILON);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), 4 * MK_REAL_EPSILON);
+    check_invariants(&r, 2);
+    MK_ASSERT_STATUS(mk_overlap(&a, xf(0, 0, 0), &a, xf(0.5, 0.25, 2), NULL, &ov), MK_OK);
+    ck_assert_int_eq(ov, 1);
+    r = dist_ok(&a, xf(0, 0, 0), &a, xf(2, 2, 2)); /* corner to corner */
+    MK_ASSERT_NEAR(r.distance, 0, 4 * MK_REAL_EPSILON);
+    check_invariants(&r, 2);
+    r = dist_ok(&a, xf(0, 0, 0), &a, xf(2, 0, 2)); /* edge to edge */
+    MK_ASSERT_NEAR(r.distance, 0, 4 * MK_REAL_EPSILON);
+    check_invariants(&r, 2);
+    /* rotated 45 degrees about z, resting on the top face */
+    r = dist_ok(&a, xf(0, 0, 0), &a, xfq(mk_v3(0, 0, 2), z45));
+    MK_ASSERT_NEAR(r.distance, 0, 8 * MK_REAL_EPSILON);
+    MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), 8 * MK_REAL_EPSILON);
+}
+END_TEST
+
+/* fcl #493/#495 (drake #18704, #21673): rotated boxes a hair apart. fcl's
+ * GJK declared them touching within its tolerance and its EPA, started from
+ * that simplex, found the origin outside the polytope and threw. Here the
+ * sign must follow the true gap at +-1e-9 (far above double rounding,
+ * 1e-16 m here), and the value must be exact to rounding. */
+START_TEST(regression_kissing_rotated_boxes)
+{
+#if !defined(MK_SINGLE)
+    mk_shape a, b;
+    mk_quat qa = mk_quat_normalize(mk_quat_make(0.2, -0.3, 0.5, 0.8)), qb = mk_quat_normalize(mk_quat_make(-0.6, 0.1, 0.3, 0.7));
+    mk_vec3 dir = mk_v3_normalize(mk_v3(0.3, 0.5, 0.8));
+    int sgn, k;
+    mk_shape_box(mk_v3(0.5, 0.3, 0.2), 0, &a);
+    mk_shape_box(mk_v3(0.4, 0.25, 0.6), 0, &b);
+    for (k = 0; k < 2; ++k) {
+        /* place B by bisection on the true distance so the gap is +-1e-9 */
+        obox oa = make_obox(a.u.half_extents, xfq(mk_v3(0, 0, 0), qa));
+        double lo = 0, hi = 5, target;
+        for (sgn = -1; sgn <= 1; sgn += 2) {
+            mk_distance_result r;
+            int ov, it;
+            target = sgn * 1e-9;
+            lo = 0;
+            hi = 5;
+            for (it = 0; it < 200; ++it) {
+                double mid = 0.5 * (lo + hi);
+                obox ob = make_obox(b.u.half_extents, xfq(mk_v3_scale(dir, (mk_real)mid), qb));
+                if (box_box_oracle(&oa, &ob) < target) lo = mid; else hi = mid;
+            }
+            {
+                mk_transform xb = xfq(mk_v3_scale(dir, (mk_real)hi), qb);
+                obox ob = make_obox(b.u.half_extents, xb);
+                double want = box_box_oracle(&oa, &ob);
+                r = dist_ok(&a, xfq(mk_v3(0, 0, 0), qa), &b, xb);
+                MK_ASSERT_NEAR(r.distance, want, 1e-14);
+                ck_assert(sgn < 0 ? r.distance < 0 : r.distance > 0);
+                MK_ASSERT_STATUS(mk_overlap(&a, xfq(mk_v3(0, 0, 0), qa), &b, xb, NULL, &ov), MK_OK);
+                ck_assert_int_eq(ov, sgn < 0);
+            }
+        }
+        qb = mk_quat_normalize(mk_quat_make(0.1, 0.9, -0.2, 0.3));
+        dir = mk_v3_normalize(mk_v3(-0.7, 0.2, 0.4));
+    }
+#endif
+}
+END_TEST
+
+START_TEST(bad_input_statuses)
+{
+    mk_shape s, bad;
+    mk_distance_result r, before;
+    mk_real ad = 42;
+    int ov = 7;
+    mk_shape_sphere(1, &s);
+    bad = s;
+    bad.radius = -1;
+    memset(&r, 0x5a, sizeof r);
+    before = r;
+    MK_ASSERT_STATUS(mk_distance(NULL, xf(0, 0, 0), &s, xf(0, 0, 0), NULL, &r), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_distance(&s, xf(0, 0, 0), NULL, xf(0, 0, 0), NULL, &r), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_distance(&s, xf(0, 0, 0), &s, xf(0, 0, 0), NULL, NULL), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_distance(&bad, xf(0, 0, 0), &s, xf(0, 0, 0), NULL, &r), MK_ERR_BAD_SIZE);
+    MK_ASSERT_STATUS(mk_distance(&s, xf((mk_real)NAN, 0, 0), &s, xf(0, 0, 0), NULL, &r), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_distance(&s, xf(0, 0, 0), &s, xf(0, (mk_real)INFINITY, 0), NULL, &r), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_distance(&s, xfq(mk_v3(0, 0, 0), mk_quat_make(0, 0, (mk_real)NAN, 1)), &s, xf(0, 0, 0), NULL, &r),
+                     MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_distance(&s, xfq(mk_v3(0, 0, 0), mk_quat_make(0, 0, 0, 2)), &s, xf(0, 0, 0), NULL, &r),
+                     MK_ERR_BAD_ROTATION);
+    bad = s;
+    bad.type = MK_SHAPE_TYPE_COUNT;
+    MK_ASSERT_STATUS(mk_distance(&s, xf(0, 0, 0), &bad, xf(0, 0, 0), NULL, &r), MK_ERR_BAD_SHAPE);
+    ck_assert(memcmp(&r, &before, sizeof r) == 0); /* untouched on error */
+    MK_ASSERT_STATUS(mk_overlap(&s, xf(0, 0, 0), &s, xfq(mk_v3(0, 0, 0), mk_quat_make(0, 1, 0, 1)), NULL, &ov),
+                     MK_ERR_BAD_ROTATION);
+    MK_ASSERT_STATUS(mk_overlap(&s, xf(0, 0, 0), &s, xf(0, 0, 0), NULL, NULL), MK_ERR_NULL);
+    ck_assert_int_eq(ov, 7);
+    MK_ASSERT_STATUS(mk_approx_distance(&s, xf(0, 0, 0), &s, xf((mk_real)NAN, 0, 0), &ad), MK_ERR_NOT_FINITE);
+    ck_assert(ad == 42);
+    /* A quaternion drifted within tolerance is accepted and renormalised: no accuracy lost. */
+    {
+        mk_shape box;
+        mk_real g = 1 + MK_QUAT_TOLERANCE / 4;
+        mk_shape_box(mk_v3(1, 1, 1), 0, &box);
+        MK_ASSERT_STATUS(mk_distance(&box, xfq(mk_v3(0, 0, 0), mk_quat_make(0, 0, 0, g)), &s, xf(0, 0, 3), NULL, &r), MK_OK);
+        MK_ASSERT_NEAR(r.distance, 1, TOL);
+    }
+    ck_assert_str_eq(mk_method_name(MK_METHOD_EPA), "epa");
+    ck_assert_str_eq(mk_method_name((mk_method)99), "unknown");
+}
+END_TEST
+
+/* A sphere-only scene never enters GJK, and the capsule/box/plane closed forms
+ * report so too. */
+START_TEST(dispatch_reports_method)
+{
+    mk_shape sp, bx, cp, pl, cy;
+    mk_distance_result r;
+    mk_rng rng = {5};
+    int i;
+    mk_shape_sphere(0.3, &sp);
+    mk_shape_box(mk_v3(1, 2, 3), 0, &bx);
+    mk_shape_capsule(0.2, 1, &cp);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &pl);
+    mk_shape_cylinder(1, 1, 0, &cy);
+    for (i = 0; i < 100; ++i) {
+        mk_transform xa = xfq(mk_rng_v3(&rng, -2, 2), mk_rng_quat(&rng)), xb = xfq(mk_rng_v3(&rng, -2, 2), mk_rng_quat(&rng));
+        r = dist_ok(&sp, xa, &sp, xb);
+        ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+        r = dist_ok(&sp, xa, &bx, xb);
+        ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+        r = dist_ok(&cp, xa, &sp, xb);
+        ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+        r = dist_ok(&cp, xa, &cp, xb);
+        ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+        r = dist_ok(&pl, xa, &bx, xb);
+        ck_assert_int_eq(r.method, MK_METHOD_CLOSED_FORM);
+        r = dist_ok(&cy, xa, &bx, xb);
+        ck_assert(r.method == MK_METHOD_GJK || r.method == MK_METHOD_EPA);
+    }
+}
+END_TEST
+
+/* Seed 003: the nearest-vertex walk is a pair of vertices, so its distance
+ * bounds the true one from above. */
+START_TEST(approx_distance_is_upper_bound)
+{
+    mk_shape a, b, c;
+    mk_rng rng = {9};
+    mk_real ad;
+    int i;
+    mk_shape_box(mk_v3(1, 0.5, 0.25), 0, &a);
+    mk_shape_box(mk_v3(0.3, 1, 0.7), 0.1, &b);
+    mk_shape_cylinder(1, 1, 0, &c);
+    for (i = 0; i < 300; ++i) {
+        mk_transform xa = xfq(mk_rng_v3(&rng, -1, 1), mk_rng_quat(&rng)), xb = xfq(mk_rng_v3(&rng, -4, 4), mk_rng_quat(&rng));
+        mk_distance_result r = dist_ok(&a, xa, &b, xb);
+        MK_ASSERT_STATUS(mk_approx_distance(&a, xa, &b, xb, &ad), MK_OK);
+        ck_assert_msg(ad >= r.distance - 1e-5 * 0 - 8 * MK_REAL_EPSILON * 10, "approx %g < true %g", (double)ad, (double)r.distance);
+        ck_assert(ad <= r.distance + 10); /* and not absurd */
+    }
+    MK_ASSERT_STATUS(mk_approx_distance(&a, xf(0, 0, 0), &c, xf(3, 0, 0), &ad), MK_ERR_UNSUPPORTED);
+}
+END_TEST
+
+static Suite *distance_suite(void)
+{
+    Suite *s = suite_create("distance");
+    TCase *tc = tcase_create("closed_forms");
+    TCase *tb = tcase_create("boxes");
+    TCase *tr = tcase_create("regressions");
+    tcase_add_test(tc, sphere_sphere_analytic);
+    tcase_add_test(tc, large_coordinates_keep_precision);
+    tcase_add_test(tc, sphere_box_analytic);
+    tcase_add_test(tc, capsule_analytic);
+    tcase_add_test(tc, shapes_against_plane);
+    tcase_add_test(tc, bad_input_statuses);
+    tcase_add_test(tc, dispatch_reports_method);
+    tcase_add_test(tb, box_box_against_oracle);
+    tcase_add_test(tb, approx_distance_is_upper_bound);
+    tcase_add_test(tr, regression_stacked_cubes);
+    tcase_add_test(tr, regression_size_disparity);
+    tcase_add_test(tr, regression_touching_boxes);
+    tcase_add_test(tr, regression_kissing_rotated_boxes);
+    suite_add_tcase(s, tc);
+    suite_add_tcase(s, tb);
+    suite_add_tcase(s, tr);
+    return s;
+}
+
+int main(void) { return mk_test_run(distance_suite()); }

@@ -1,0 +1,594 @@
+/* test_manifold.c: contact manifolds against analytic contact regions, feature
+ * IDs, their stability under motion, and bad input. */
+#include <string.h>
+
+#include "minko/manifold.h"
+#include "support/mk_test.h"
+
+#define V(i) MK_FEATURE(MK_FEATURE_VERTEX, i)
+#define E(i) MK_FEATURE(MK_FEATURE_EDGE, i)
+#define F(i) MK_FEATURE(MK_FEATURE_FACE, i)
+#define PAIR(a, b) MK_FEATURE_PAIR(a, b)
+
+/* Coordinates are O(1..10): "exact" means a few ulps of that. */
+#if defined(MK_SINGLE)
+#  define TOL 2e-5
+#else
+#  define TOL 1e-12
+#endif
+
+static mk_transform at(mk_real x, mk_real y, mk_real z) { return mk_transform_make(mk_v3(x, y, z), mk_quat_identity()); }
+static mk_transform turned(mk_vec3 p, mk_vec3 axis, double angle)
+{
+    return mk_transform_make(p, mk_quat_from_axis_angle(axis, (mk_real)angle));
+}
+
+/* The manifold's own invariants, whatever the pair. */
+static void check_invariants(const mk_manifold *m, mk_transform xa, mk_transform xb, mk_real margin, double tol)
+{
+    int i, j;
+    ck_assert_int_ge(m->count, 0);
+    ck_assert_int_le(m->count, MK_MANIFOLD_MAX_POINTS);
+    if (m->count == 0) return;
+    MK_ASSERT_NEAR(mk_v3_len(m->normal), 1, 8 * MK_REAL_EPSILON);
+    for (i = 0; i < m->count; ++i) {
+        const mk_contact_point *c = &m->points[i];
+        MK_ASSERT_V3_NEAR(c->point_b, mk_v3_mad(c->point_a, -c->depth, m->normal), tol);
+        MK_ASSERT_V3_NEAR(mk_transform_point(xa, c->local_a), c->point_a, tol);
+        MK_ASSERT_V3_NEAR(mk_transform_point(xb, c->local_b), c->point_b, tol);
+        ck_assert(c->depth >= -margin);
+        ck_assert_int_eq((int)c->flags, c->depth < 0 ? (int)MK_CONTACT_SPECULATIVE : 0);
+        for (j = 0; j < i; ++j) ck_assert_msg(m->points[j].features != c->features, "duplicate feature pair %08x", c->features);
+    }
+}
+
+static mk_manifold collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_real margin)
+{
+    mk_manifold m;
+    mk_real scale = mk_max(1, mk_max(mk_v3_max_abs(xa.p), mk_v3_max_abs(xb.p)));
+    memset(&m, 0xCD, sizeof m);
+    MK_ASSERT_STATUS(mk_collide(a, xa, b, xb, margin, NULL, &m), MK_OK);
+    check_invariants(&m, xa, xb, margin, 64 * TOL * scale);
+    return m;
+}
+
+/* Index of the point with these features, or -1. */
+static int find(const mk_manifold *m, uint32_t features)
+{
+    int i;
+    for (i = 0; i < m->count; ++i)
+        if (m->points[i].features == features) return i;
+    return -1;
+}
+
+static const mk_contact_point *expect(const mk_manifold *m, uint32_t features)
+{
+    int i = find(m, features);
+    ck_assert_msg(i >= 0, "no point with features %08x", features);
+    return &m->points[i];
+}
+
+START_TEST(sphere_sphere_exact)
+{
+    mk_shape a, b;
+    mk_manifold m;
+    mk_shape_sphere(1, &a);
+    mk_shape_sphere(1, &b);
+    m = collide(&a, at(0, 0, 0), &b, at(1.5, 0, 0), 0);
+    ck_assert_int_eq(m.count, 1);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(1, 0, 0), TOL);
+    MK_ASSERT_NEAR(m.points[0].depth, 0.5, TOL);
+    MK_ASSERT_V3_NEAR(m.points[0].point_a, mk_v3(1, 0, 0), TOL);
+    MK_ASSERT_V3_NEAR(m.points[0].point_b, mk_v3(0.5, 0, 0), TOL);
+    ck_assert_uint_eq(m.points[0].features, PAIR(V(0), V(0)));
+    /* Far from the origin and rotated: the same answer, relative to the pose. */
+    m = collide(&a, turned(mk_v3(1e4, -2e4, 3e3), mk_v3(1, 2, 3), 0.7), &b, at(1e4, -2e4 + 1.14, 3e3 + 1.52), 0);
+    ck_assert_int_eq(m.count, 1);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0.6, 0.8), 1e4 * TOL);
+    MK_ASSERT_NEAR(m.points[0].depth, 0.1, 1e4 * TOL);
+    MK_ASSERT_V3_NEAR(m.points[0].point_a, mk_v3(1e4, -2e4 + 0.6, 3e3 + 0.8), 1e4 * TOL);
+    /* Separated beyond the margin: nothing; within it: one speculative point. */
+    m = collide(&a, at(0, 0, 0), &b, at(0, 0, 2.1), 0.05);
+    ck_assert_int_eq(m.count, 0);
+    m = collide(&a, at(0, 0, 0), &b, at(0, 0, 2.1), 0.2);
+    ck_assert_int_eq(m.count, 1);
+    MK_ASSERT_NEAR(m.points[0].depth, -0.1, TOL);
+    ck_assert_uint_eq(m.points[0].flags, MK_CONTACT_SPECULATIVE);
+}
+END_TEST
+
+START_TEST(sphere_box_regions)
+{
+    mk_shape box, s;
+    mk_manifold m;
+    const mk_contact_point *c;
+    mk_shape_box(mk_v3(1, 2, 3), 0, &box);
+    mk_shape_sphere(0.5, &s);
+    /* Face +y. */
+    m = collide(&box, at(0, 0, 0), &s, at(0.3, 2.4, -1), 0);
+    ck_assert_int_eq(m.count, 1);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 1, 0), TOL);
+    c = expect(&m, PAIR(F(3), V(0)));
+    MK_ASSERT_NEAR(c->depth, 0.1, TOL);
+    MK_ASSERT_V3_NEAR(c->point_a, mk_v3(0.3, 2, -1), TOL);
+    /* Edge along z at (+x, -y): corner bits x+ = 1, y- = 0 -> edge 8 + 1. Touching:
+     * a small margin keeps the point when round-off makes the depth -1 ulp. */
+    m = collide(&box, at(0, 0, 0), &s, at(1.3, -2.4, 0.5), 1e-3);
+    ck_assert_int_eq(m.count, 1);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(0.6, -0.8, 0), TOL);
+    c = expect(&m, PAIR(E(9), V(0)));
+    MK_ASSERT_NEAR(c->depth, 0, TOL);
+    /* Vertex (-x, +y, +z) = bits 110 = 6. */
+    m = collide(&box, at(0, 0, 0), &s, at(-1.2, 2.2, 3.2), 0);
+    c = expect(&m, PAIR(V(6), V(0)));
+    MK_ASSERT_NEAR(c->depth, 0.5 - sqrt(0.12), TOL);
+    /* Centre inside the box, nearest face -x. */
+    m = collide(&box, at(0, 0, 0), &s, at(-0.9, 0.5, 0.5), 0);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(-1, 0, 0), TOL);
+    c = expect(&m, PAIR(F(0), V(0)));
+    MK_ASSERT_NEAR(c->depth, 0.6, TOL);
+    /* Sphere first: everything mirrored. */
+    m = collide(&s, at(0.3, 2.4, -1), &box, at(0, 0, 0), 0);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, -1, 0), TOL);
+    c = expect(&m, PAIR(V(0), F(3)));
+    MK_ASSERT_V3_NEAR(c->point_b, mk_v3(0.3, 2, -1), TOL);
+    MK_ASSERT_NEAR(c->depth, 0.1, TOL);
+}
+END_TEST
+
+START_TEST(box_on_plane_corners)
+{
+    mk_shape box, ground, rounded;
+    mk_manifold m;
+    int i;
+    mk_shape_box(mk_v3(1, 0.5, 0.25), 0, &box);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &ground);
+    /* Resting 0.01 deep, turned about z: the four bottom corners, each 0.01 deep. */
+    {
+        mk_transform x = turned(mk_v3(3, 4, 0.24), mk_v3(0, 0, 1), 0.3);
+        m = collide(&box, x, &ground, at(0, 0, 0), 0);
+        ck_assert_int_eq(m.count, 4);
+        MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, -1), TOL);
+        for (i = 0; i < 4; ++i) {
+            static const int corners[4] = {0, 1, 2, 3}; /* z- corners: bit 2 clear */
+            const mk_contact_point *c = expect(&m, PAIR(V(corners[i]), F(0)));
+            mk_vec3 h = mk_v3(corners[i] & 1 ? 1 : -1, corners[i] & 2 ? 0.5 : -0.5, -0.25);
+            MK_ASSERT_NEAR(c->depth, 0.01, TOL);
+            MK_ASSERT_V3_NEAR(c->point_a, mk_transform_point(x, h), TOL);
+            MK_ASSERT_NEAR(c->point_b.z, 0, TOL);
+        }
+    }
+    /* Balanced on the edge along y at (+x, -z) (rotated 45 deg about y): 2 points. */
+    {
+        mk_transform x;
+        mk_shape_box(mk_v3(0.5, 0.5, 0.5), 0, &box);
+        x = turned(mk_v3(0, 0, (mk_real)(sqrt(0.5) - 0.02)), mk_v3(0, 1, 0), 3.14159265358979 / 4);
+        m = collide(&box, x, &ground, at(0, 0, 0), 0);
+        ck_assert_int_eq(m.count, 2);
+        for (i = 0; i < 2; ++i) MK_ASSERT_NEAR(m.points[i].depth, 0.02, 1e-9 + TOL);
+        ck_assert_int_eq((int)MK_FEATURE_TYPE(MK_FEATURE_PAIR_A(m.points[0].features)), MK_FEATURE_VERTEX);
+    }
+    /* Rounded box: the rounding reaches down by its radius. */
+    mk_shape_box(mk_v3(0.5, 0.5, 0.5), 0.1, &rounded);
+    m = collide(&rounded, at(0, 0, 0.55), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 4);
+    for (i = 0; i < 4; ++i) {
+        MK_ASSERT_NEAR(m.points[i].depth, 0.05, TOL);
+        MK_ASSERT_NEAR(m.points[i].point_a.z, -0.05, TOL);
+    }
+    /* Speculative: hovering 0.01 above, margin 0.02: four flagged points at -0.01. */
+    m = collide(&box, at(0, 0, 0.51), &ground, at(0, 0, 0), 0.02);
+    ck_assert_int_eq(m.count, 4);
+    for (i = 0; i < 4; ++i) {
+        MK_ASSERT_NEAR(m.points[i].depth, -0.01, TOL);
+        ck_assert_uint_eq(m.points[i].flags, MK_CONTACT_SPECULATIVE);
+    }
+    m = collide(&box, at(0, 0, 0.51), &ground, at(0, 0, 0), 0.005);
+    ck_assert_int_eq(m.count, 0);
+    /* Plane first, tilted plane: mirrored. */
+    mk_shape_plane(mk_v3(0, 0, 1), 1, &ground);
+    m = collide(&ground, turned(mk_v3(0, 0, 0), mk_v3(1, 0, 0), 3.14159265358979 / 2), &box, at(0, -1.49, 0), 0);
+    ck_assert_int_eq(m.count, 4);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, -1, 0), TOL);
+    for (i = 0; i < 4; ++i) MK_ASSERT_NEAR(m.points[i].depth, 0.01, 4 * TOL);
+}
+END_TEST
+
+START_TEST(capsule_pairs)
+{
+    mk_shape cap, cap2, sph, ground;
+    mk_manifold m;
+    const mk_contact_point *c;
+    mk_shape_capsule(0.5, 1, &cap);
+    mk_shape_capsule(0.25, 2, &cap2);
+    mk_shape_sphere(0.5, &sph);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &ground);
+    /* Capsule lying on a plane (axis along x): both ends touch. */
+    m = collide(&cap, turned(mk_v3(0, 0, 0.45), mk_v3(0, 1, 0), 3.14159265358979 / 2), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 2);
+    MK_ASSERT_NEAR(m.points[0].depth, 0.05, TOL);
+    MK_ASSERT_NEAR(m.points[1].depth, 0.05, TOL);
+    ck_assert(find(&m, PAIR(V(0), F(0))) >= 0 && find(&m, PAIR(V(1), F(0))) >= 0);
+    /* Standing capsule: one end. */
+    m = collide(&cap, at(0, 0, 1.45), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 1);
+    c = expect(&m, PAIR(V(0), F(0)));
+    MK_ASSERT_NEAR(c->depth, 0.05, TOL);
+    /* Sphere against the capsule's side and its end cap. */
+    m = collide(&cap, at(0, 0, 0), &sph, at(0.9, 0, 0.3), 0);
+    c = expect(&m, PAIR(E(0), V(0)));
+    MK_ASSERT_NEAR(c->depth, 0.1, TOL);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(1, 0, 0), TOL);
+    m = collide(&sph, at(0, 0.6, 1.8), &cap, at(0, 0, 0), 0);
+    c = expect(&m, PAIR(V(0), V(1)));
+    MK_ASSERT_NEAR(c->depth, 1 - 1, TOL);
+    /* Parallel capsules, side by side, overlapping over x in [-1, 1] of A's axis: 2 points. */
+    {
+        mk_quat along_x = mk_quat_from_axis_angle(mk_v3(0, 1, 0), (mk_real)(3.14159265358979 / 2));
+        m = collide(&cap, mk_transform_make(mk_v3(0, 0, 0), along_x), &cap2, mk_transform_make(mk_v3(2.5, 0.7, 0), along_x), 0);
+        ck_assert_int_eq(m.count, 2);
+        MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 1, 0), TOL);
+        MK_ASSERT_NEAR(m.points[0].depth, 0.05, TOL);
+        MK_ASSERT_NEAR(m.points[1].depth, 0.05, TOL);
+        /* Overlap of [-1, 1] (A) and [0.5, 4.5] (B): x in [0.5, 1]. */
+        MK_ASSERT_NEAR(mk_min(m.points[0].point_a.x, m.points[1].point_a.x), 0.5, TOL);
+        MK_ASSERT_NEAR(mk_max(m.points[0].point_a.x, m.points[1].point_a.x), 1, TOL);
+        /* A's +h end (x = +1 after the turn) clips B's segment; B's -h end lies inside A's span. */
+        ck_assert(find(&m, PAIR(V(1), E(0))) >= 0);
+        ck_assert(find(&m, PAIR(E(0), V(0))) >= 0);
+    }
+    /* Crossing capsules: one point, along the common normal. */
+    m = collide(&cap, at(0, 0, 0), &cap2, turned(mk_v3(0.7, 0, 0.2), mk_v3(1, 0, 0), 3.14159265358979 / 2), 0);
+    ck_assert_int_eq(m.count, 1);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(1, 0, 0), TOL);
+    c = expect(&m, PAIR(E(0), E(0)));
+    MK_ASSERT_NEAR(c->depth, 0.05, TOL);
+}
+END_TEST
+
+/* A capsule lying on a box face gives the two ends of the segment, clipped to
+ * the face; across an edge only the part over the face remains. */
+START_TEST(capsule_on_box)
+{
+    mk_shape box, cap;
+    mk_manifold m;
+    mk_quat along_x = mk_quat_from_axis_angle(mk_v3(0, 1, 0), (mk_real)(3.14159265358979 / 2));
+    const mk_contact_point *c;
+    mk_shape_box(mk_v3(2, 1, 0.5), 0, &box);
+    mk_shape_capsule(0.25, 1, &cap);
+    m = collide(&box, at(0, 0, 0), &cap, mk_transform_make(mk_v3(0.5, 0.2, 0.7), along_x), 0);
+    ck_assert_int_eq(m.count, 2);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, 1), TOL);
+    /* along_x maps local +z to world -x... find both ends by feature. */
+    c = expect(&m, PAIR(F(5), V(0)));
+    MK_ASSERT_NEAR(c->depth, 0.05, TOL);
+    MK_ASSERT_NEAR(c->point_a.z, 0.5, TOL);
+    c = expect(&m, PAIR(F(5), V(1)));
+    MK_ASSERT_NEAR(c->depth, 0.05, TOL);
+    MK_ASSERT_NEAR(fabs((double)m.points[0].point_a.x - (double)m.points[1].point_a.x), 2, TOL);
+    /* Overhanging the +x end of the box: the end beyond x = 2 is clipped at the
+     * box's top edge along y at (+x, +z): edge 4*1 + 1 + 2 = 7, against the capsule segment. */
+    m = collide(&box, at(0, 0, 0), &cap, mk_transform_make(mk_v3(2.5, 0.2, 0.7), along_x), 0);
+    ck_assert_int_eq(m.count, 2);
+    c = expect(&m, PAIR(E(7), E(0)));
+    MK_ASSERT_NEAR(c->point_a.x, 2, TOL);
+    MK_ASSERT_NEAR(c->depth, 0.05, TOL);
+    c = expect(&m, PAIR(F(5), V(0)));
+    MK_ASSERT_NEAR(c->point_a.x, 1.5, TOL);
+    /* Tilted by 0.3 rad about y: only the low end touches, depth exact. */
+    {
+        mk_quat q = mk_quat_from_axis_angle(mk_v3(0, 1, 0), (mk_real)(3.14159265358979 / 2 + 0.3));
+        mk_real low = (mk_real)(0.7 - sin(0.3)); /* lower end's axis point height (0.7 - h sin 0.3) */
+        m = collide(&box, at(0, 0, 0), &cap, mk_transform_make(mk_v3(0, 0, 0.7), q), 0);
+        ck_assert_int_eq(m.count, 1);
+        MK_ASSERT_NEAR(m.points[0].depth, 0.25 - (low - 0.5), TOL);
+        MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, 1), TOL);
+    }
+    /* Leaning across the top edge along y at (+x, +z) (edge 7), axis along (1, 0, -1): one point on the edge. */
+    m = collide(&box, at(0, 0, 0), &cap, turned(mk_v3(2.1, 0, 0.6), mk_v3(0, 1, 0), 3 * 3.14159265358979 / 4), 0);
+    ck_assert_int_eq(m.count, 1);
+    c = &m.points[0];
+    MK_ASSERT_NEAR(c->depth, 0.25 - sqrt(0.02), 4 * TOL);
+    MK_ASSERT_V3_NEAR(c->point_a, mk_v3(2, 0, 0.5), 4 * TOL);
+    ck_assert_uint_eq(c->features, PAIR(E(7), E(0)));
+    /* Lying along that edge, just outside it: a line contact, two points, named edge against segment ends. */
+    m = collide(&box, at(0, 0, 0), &cap, turned(mk_v3(2.1, 0, 0.6), mk_v3(1, 0, 0), 3.14159265358979 / 2), 0);
+    ck_assert_int_eq(m.count, 2);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(sqrt(0.5), 0, sqrt(0.5)), 4 * TOL);
+    MK_ASSERT_NEAR(m.points[0].depth, 0.25 - sqrt(0.02), 4 * TOL);
+    MK_ASSERT_NEAR(m.points[1].depth, 0.25 - sqrt(0.02), 4 * TOL);
+    /* Pressed deep into the top face (cores overlap): face contact, both ends. */
+    m = collide(&box, at(0, 0, 0), &cap, mk_transform_make(mk_v3(0, 0, 0.4), along_x), 0);
+    ck_assert_int_eq(m.count, 2);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, 1), TOL);
+    MK_ASSERT_NEAR(m.points[0].depth, 0.35, TOL);
+    MK_ASSERT_NEAR(m.points[1].depth, 0.35, TOL);
+}
+END_TEST
+
+START_TEST(cylinder_and_cone_on_plane)
+{
+    mk_shape cyl, cone, ground;
+    mk_manifold m;
+    int i;
+    mk_shape_cylinder(0.5, 1, 0, &cyl);
+    mk_shape_cone(0.5, 1, 0, &cone);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &ground);
+    /* Standing: the bottom rim, reduced to 4 spread points of equal depth. */
+    m = collide(&cyl, turned(mk_v3(1, 2, 0.99), mk_v3(0, 0, 1), 0.1), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 4);
+    for (i = 0; i < 4; ++i) {
+        mk_vec3 p = m.points[i].point_a;
+        MK_ASSERT_NEAR(m.points[i].depth, 0.01, TOL);
+        MK_ASSERT_NEAR(mk_v3_dist(mk_v3(p.x, p.y, 0), mk_v3(1, 2, 0)), 0.5, TOL);
+        ck_assert_int_eq((int)MK_FEATURE_TYPE(MK_FEATURE_PAIR_A(m.points[i].features)), MK_FEATURE_VERTEX);
+        ck_assert_int_lt(MK_FEATURE_GET_INDEX(MK_FEATURE_PAIR_A(m.points[i].features)), 8);
+    }
+    /* The four span the rim: a square of side r*sqrt(2). */
+    {
+        mk_real span = 0;
+        int j;
+        for (i = 0; i < 4; ++i)
+            for (j = 0; j < i; ++j) span = mk_max(span, mk_v3_dist(m.points[i].point_a, m.points[j].point_a));
+        MK_ASSERT_NEAR(span, 1, TOL);
+    }
+    /* Tilted by 0.2 rad about a horizontal axis between the rim samples: the
+     * deepest point is the exact rim support point, named by the rim. */
+    {
+        mk_transform x = turned(mk_v3(0, 0, 1), mk_v3(1, 0.4, 0), 0.2);
+        mk_real lowest = (mk_real)(1 - cos(0.2) - 0.5 * sin(0.2)), best = -1;
+        m = collide(&cyl, x, &ground, at(0, 0, 0), 0);
+        ck_assert_int_ge(m.count, 1);
+        for (i = 0; i < m.count; ++i) best = mk_max(best, m.points[i].depth);
+        MK_ASSERT_NEAR(best, -lowest, TOL);
+        ck_assert(find(&m, PAIR(E(0), F(0))) >= 0); /* named by the bottom rim */
+    }
+    /* Lying on its side: the generator line, two points. */
+    m = collide(&cyl, turned(mk_v3(0, 0, 0.49), mk_v3(1, 0, 0), 3.14159265358979 / 2), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 2);
+    MK_ASSERT_NEAR(m.points[0].depth, 0.01, TOL);
+    MK_ASSERT_NEAR(m.points[1].depth, 0.01, TOL);
+    ck_assert(find(&m, PAIR(E(0), F(0))) >= 0 && find(&m, PAIR(E(1), F(0))) >= 0);
+    /* Cone on its base: 4 rim points; upside down on its apex: one point. */
+    m = collide(&cone, at(0, 0, 0.99), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 4);
+    m = collide(&cone, turned(mk_v3(0, 0, 0.99), mk_v3(1, 0, 0), 3.14159265358979), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 1);
+    ck_assert_uint_eq(m.points[0].features, PAIR(V(16), F(0)));
+    MK_ASSERT_NEAR(m.points[0].depth, 0.01, TOL);
+}
+END_TEST
+
+START_TEST(bad_input)
+{
+    mk_shape s, p, bad;
+    mk_manifold m;
+    mk_shape_sphere(1, &s);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &p);
+    memset(&bad, 0, sizeof bad);
+    bad.type = MK_SHAPE_BOX; /* zero extents */
+    memset(&m, 0x5A, sizeof m);
+    MK_ASSERT_STATUS(mk_collide(NULL, at(0, 0, 0), &s, at(0, 0, 0), 0, NULL, &m), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_collide(&s, at(0, 0, 0), &s, at(0, 0, 0), 0, NULL, NULL), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_collide(&s, at(0, 0, 0), &bad, at(0, 0, 0), 0, NULL, &m), MK_ERR_BAD_SIZE);
+    MK_ASSERT_STATUS(mk_collide(&s, at((mk_real)NAN, 0, 0), &s, at(0, 0, 0), 0, NULL, &m), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_collide(&s, at(0, 0, 0), &s, mk_transform_make(mk_v3(0, 0, 0), mk_quat_make(0, 0, 0, 2)), 0, NULL, &m),
+                     MK_ERR_BAD_ROTATION);
+    MK_ASSERT_STATUS(mk_collide(&s, at(0, 0, 0), &s, at(0, 0, 0), -1, NULL, &m), MK_ERR_BAD_ARGUMENT);
+    MK_ASSERT_STATUS(mk_collide(&s, at(0, 0, 0), &s, at(0, 0, 0), (mk_real)INFINITY, NULL, &m), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_collide(&p, at(0, 0, 0), &p, at(0, 0, 0), 0, NULL, &m), MK_ERR_UNSUPPORTED);
+    {
+        mk_manifold untouched;
+        memset(&untouched, 0x5A, sizeof untouched);
+        ck_assert(memcmp(&m, &untouched, sizeof m) == 0);
+    }
+    /* A slightly drifted quaternion is accepted and renormalised. */
+    MK_ASSERT_STATUS(mk_collide(&s, at(0, 0, 0), &s, mk_transform_make(mk_v3(1, 0, 0), mk_quat_make(0, 0, 0, (mk_real)(1 + 1e-7))),
+                                0, NULL, &m), MK_OK);
+    ck_assert_int_eq(m.count, 1);
+}
+END_TEST
+
+
+/* ---- brute-force references (independent of the library's closest-point code) ---- */
+
+static double box_point_dist(mk_vec3 h, mk_vec3 p)
+{
+    double dx = fmax(fabs((double)p.x) - (double)h.x, 0), dy = fmax(fabs((double)p.y) - (double)h.y, 0),
+           dz = fmax(fabs((double)p.z) - (double)h.z, 0);
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+static double seg_point_dist(mk_vec3 a, mk_vec3 b, mk_vec3 p)
+{
+    double ab[3] = {(double)b.x - a.x, (double)b.y - a.y, (double)b.z - a.z}, ap[3] = {(double)p.x - a.x, (double)p.y - a.y, (double)p.z - a.z};
+    double t = (ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2]) / (ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]);
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return sqrt(pow(ap[0] - t * ab[0], 2) + pow(ap[1] - t * ab[1], 2) + pow(ap[2] - t * ab[2], 2));
+}
+
+/* min over s in [0, 1] of f(p0 + s (p1 - p0)) for convex f: ternary search. */
+typedef double (*dist_fn)(const void *ctx, mk_vec3 p);
+static double min_along(mk_vec3 p0, mk_vec3 p1, dist_fn f, const void *ctx)
+{
+    double lo = 0, hi = 1;
+    int i;
+    for (i = 0; i < 200; ++i) {
+        double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+        if (f(ctx, mk_v3_lerp(p0, p1, (mk_real)m1)) < f(ctx, mk_v3_lerp(p0, p1, (mk_real)m2))) hi = m2;
+        else lo = m1;
+    }
+    return f(ctx, mk_v3_lerp(p0, p1, (mk_real)(0.5 * (lo + hi))));
+}
+static double to_box(const void *ctx, mk_vec3 p) { return box_point_dist(*(const mk_vec3 *)ctx, p); }
+static double to_seg(const void *ctx, mk_vec3 p) { const mk_vec3 *s = (const mk_vec3 *)ctx; return seg_point_dist(s[0], s[1], p); }
+
+static mk_real max_depth(const mk_manifold *m)
+{
+    mk_real d = -MK_REAL_MAX;
+    int i;
+    for (i = 0; i < m->count; ++i) d = mk_max(d, m->points[i].depth);
+    return d;
+}
+
+/* Random poses: every manifold satisfies the invariants, and its deepest
+ * point equals the exact penetration (closed-form pairs, cores disjoint). */
+START_TEST(random_pairs_exact_depth)
+{
+    mk_rng r = {7};
+    mk_shape box, cap, cap2, sph, ground;
+    int i, hits = 0;
+    mk_shape_box(mk_v3(1, 0.6, 0.3), 0.05, &box);
+    mk_shape_capsule(0.3, 0.8, &cap);
+    mk_shape_capsule(0.2, 0.5, &cap2);
+    mk_shape_sphere(0.4, &sph);
+    mk_shape_plane(mk_rng_dir(&r), (mk_real)0.3, &ground);
+    for (i = 0; i < 2000; ++i) {
+        mk_vec3 base = mk_rng_v3(&r, -100, 100);
+        mk_transform xa = mk_transform_make(base, mk_rng_quat(&r));
+        mk_transform xb = mk_transform_make(mk_v3_add(base, mk_rng_v3(&r, -1.6, 1.6)), mk_rng_quat(&r));
+        mk_transform rel = mk_transform_inv_mul(xa, xb);
+        mk_manifold m;
+        double ref;
+        int kind = i % 5;
+        if (kind == 0) { /* box - capsule, cores disjoint */
+            mk_vec3 s[2];
+            s[0] = mk_transform_point(rel, mk_v3(0, 0, -cap.u.capsule.half_height));
+            s[1] = mk_transform_point(rel, mk_v3(0, 0, cap.u.capsule.half_height));
+            ref = min_along(s[0], s[1], to_box, &box.u.half_extents);
+            if (ref < 1e-3) continue;
+            m = collide(&box, xa, &cap, xb, 0.5);
+            ref = box.radius + cap.radius - ref;
+        } else if (kind == 1) { /* capsule - capsule */
+            mk_vec3 s[2], q0, q1;
+            s[0] = mk_v3(0, 0, -cap.u.capsule.half_height);
+            s[1] = mk_v3(0, 0, cap.u.capsule.half_height);
+            q0 = mk_transform_point(rel, mk_v3(0, 0, -cap2.u.capsule.half_height));
+            q1 = mk_transform_point(rel, mk_v3(0, 0, cap2.u.capsule.half_height));
+            ref = min_along(q0, q1, to_seg, s);
+            if (ref < 1e-3) continue;
+            m = collide(&cap, xa, &cap2, xb, 0.5);
+            ref = cap.radius + cap2.radius - ref;
+        } else if (kind == 2) { /* sphere - box */
+            ref = box_point_dist(box.u.half_extents, mk_transform_inv_point(xb, xa.p));
+            if (ref < 1e-3) continue;
+            m = collide(&sph, xa, &box, xb, 0.5);
+            ref = sph.radius + box.radius - ref;
+        } else if (kind == 3) { /* sphere - capsule */
+            mk_vec3 c = mk_transform_inv_point(xb, xa.p);
+            ref = seg_point_dist(mk_v3(0, 0, -cap.u.capsule.half_height), mk_v3(0, 0, cap.u.capsule.half_height), c);
+            if (ref < 1e-3) continue;
+            m = collide(&sph, xa, &cap, xb, 0.5);
+            ref = sph.radius + cap.radius - ref;
+        } else { /* box - plane through base */
+            mk_transform xp = mk_transform_make(base, mk_quat_identity());
+            int k;
+            ref = -1e300;
+            for (k = 0; k < 8; ++k) {
+                mk_vec3 h = box.u.half_extents;
+                mk_vec3 c = mk_transform_point(xa, mk_v3(k & 1 ? h.x : -h.x, k & 2 ? h.y : -h.y, k & 4 ? h.z : -h.z));
+                ref = fmax(ref, (double)ground.u.plane.offset - mk_v3_dot(ground.u.plane.normal, mk_v3_sub(c, base)) + box.radius);
+            }
+            m = collide(&box, xa, &ground, xp, 0.5);
+        }
+        if (ref < -0.5) {
+            ck_assert_int_eq(m.count, 0);
+            continue;
+        }
+        ck_assert_int_ge(m.count, 1);
+        hits++;
+        /* Coordinates reach 100: 100 x the unit-scale tolerance. */
+        ck_assert_msg(fabs((double)max_depth(&m) - ref) <= 100 * (2 * TOL), "case %d kind %d: depth %.17g ref %.17g count %d", i, kind, (double)max_depth(&m), ref, m.count);
+    }
+    ck_assert_int_gt(hits, 500);
+}
+END_TEST
+
+static int same_ids(const mk_manifold *a, const mk_manifold *b)
+{
+    int i;
+    if (a->count != b->count) return 0;
+    for (i = 0; i < a->count; ++i)
+        if (find(b, a->points[i].features) < 0) return 0;
+    return 1;
+}
+
+/* A box resting on the ground and sliding slowly, wobbling by round-off-size
+ * rotations, keeps the same four feature pairs every frame. */
+START_TEST(ids_stable_box_sliding_on_plane)
+{
+    mk_shape box, ground;
+    mk_manifold first, m;
+    mk_rng r = {11};
+    int f;
+    mk_shape_box(mk_v3(0.5, 0.5, 0.5), 0, &box);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &ground);
+    for (f = 0; f < 300; ++f) {
+        mk_real wob = (mk_real)(1e-4 * mk_rng_range(&r, -1, 1));
+        mk_transform x = turned(mk_v3((mk_real)(0.002 * f), (mk_real)(0.001 * f), (mk_real)(0.5 - 0.003 + 1e-4 * mk_rng_unit(&r))),
+                                mk_v3(wob, 1, (mk_real)(0.01 * f)), (double)wob);
+        m = collide(&box, x, &ground, at(0, 0, 0), 0);
+        ck_assert_int_eq(m.count, 4);
+        if (f == 0) first = m;
+        ck_assert_msg(same_ids(&first, &m), "feature ids changed at frame %d", f);
+    }
+}
+END_TEST
+
+/* Seed 000's a/b/c/d example: a box spinning on the ground. From one frame
+ * to the next each corner moves to near where another corner was, so
+ * matching contacts by world distance hands each impulse to the wrong
+ * contact, and matching within Bullet's 0.02 breaking threshold finds none;
+ * matching by feature ID pairs every contact with itself. */
+START_TEST(seed000_id_matching_beats_distance)
+{
+    mk_shape box, ground;
+    mk_manifold m0, m1;
+    int i, j, wrong_world = 0, kept_bullet = 0, right_id = 0;
+    const double step = 60 * 3.14159265358979 / 180;
+    mk_shape_box(mk_v3(0.5, 0.5, 0.5), 0, &box);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &ground);
+    m0 = collide(&box, turned(mk_v3(0, 0, 0.49), mk_v3(0, 0, 1), 0), &ground, at(0, 0, 0), 0);
+    m1 = collide(&box, turned(mk_v3(0, 0, 0.49), mk_v3(0, 0, 1), step), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m0.count, 4);
+    ck_assert_int_eq(m1.count, 4);
+    for (i = 0; i < 4; ++i) {
+        /* The true successor of old point i is the same box corner. */
+        int truth = find(&m1, m0.points[i].features), nearest = -1;
+        double best = 1e300;
+        ck_assert_int_ge(truth, 0);
+        right_id++;
+        for (j = 0; j < 4; ++j) {
+            double d = (double)mk_v3_dist(m0.points[i].point_b, m1.points[j].point_b);
+            if (d < best) { best = d; nearest = j; }
+        }
+        wrong_world += nearest != truth;
+        kept_bullet += best <= 0.02;
+    }
+    ck_assert_int_eq(right_id, 4);
+    ck_assert_int_eq(wrong_world, 4); /* every impulse goes to a neighbouring corner */
+    ck_assert_int_eq(kept_bullet, 0);
+}
+END_TEST
+
+static Suite *manifold_suite(void)
+{
+    Suite *s = suite_create("manifold");
+    TCase *tc = tcase_create("closed_forms");
+    tcase_add_test(tc, sphere_sphere_exact);
+    tcase_add_test(tc, sphere_box_regions);
+    tcase_add_test(tc, box_on_plane_corners);
+    tcase_add_test(tc, capsule_pairs);
+    tcase_add_test(tc, capsule_on_box);
+    tcase_add_test(tc, cylinder_and_cone_on_plane);
+    tcase_add_test(tc, bad_input);
+    tcase_add_test(tc, random_pairs_exact_depth);
+    suite_add_tcase(s, tc);
+    tc = tcase_create("feature_ids");
+    tcase_add_test(tc, ids_stable_box_sliding_on_plane);
+    tcase_add_test(tc, seed000_id_matching_beats_distance);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+int main(void) { return mk_test_run(manifold_suite()); }
