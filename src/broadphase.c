@@ -298,8 +298,8 @@ static void observe_motion(mk_bp *bp)
         e = mk_v3_sub(bp->box[s].hi, bp->box[s].lo);
         if (d.x > e.x || d.y > e.y || d.z > e.z) ++far;
     }
-    bp->moved_share = 0.75 * bp->moved_share + 0.25 * (moved / n);
-    bp->far_share = 0.75 * bp->far_share + 0.25 * (far / n);
+    bp->moved_share = 0.5 * bp->moved_share + 0.5 * (moved / n);
+    bp->far_share = 0.5 * bp->far_share + 0.5 * (far / n);
 }
 
 /* SAP's insertion sort pays per endpoint crossed: it wins on small, coherent
@@ -318,8 +318,9 @@ static void auto_choose(mk_bp *bp)
 {
     mk_bp_kind want;
     if (bp->def.kind != MK_BP_AUTO) return;
-    observe_motion(bp);
-    /* Decide on the first frame, then every 32 frames: a switch costs a rebuild. */
+    /* Sample the motion every 8th update and decide every 32nd (the first
+     * included): a switch costs a rebuild, and the sampling is not free. */
+    if (bp->frames_since_choice % 8 == 0) observe_motion(bp);
     if (bp->frames_since_choice++ % 32 != 0) return;
     want = auto_choice(bp);
     if (want == bp->kind) return;

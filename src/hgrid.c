@@ -653,7 +653,7 @@ static void restart_travel(mk_bp *bp, struct mk_hgrid *g)
     for (i = 0; i < bp->pairs.count; ++i) bp->pairs.e[i].wake = 0;
 }
 
-/* The largest move of any face from box o to box n (infinite when a side is). */
+/* The largest move of any face from box o to box n (NaN when a side is infinite). */
 static double face_travel(const mk_aabb *o, const mk_aabb *n)
 {
     const mk_real *ol = &o->lo.x, *oh = &o->hi.x, *nl = &n->lo.x, *nh = &n->hi.x;
@@ -661,9 +661,10 @@ static double face_travel(const mk_aabb *o, const mk_aabb *n)
     int k;
     for (k = 0; k < 3; ++k) {
         double dl = fabs((double)nl[k] - (double)ol[k]), dh = fabs((double)nh[k] - (double)oh[k]);
-        if (!(dl <= 1e300 && dh <= 1e300)) return HUGE_VAL; /* inf - inf: test always */
-        if (dl > d) d = dl;
-        if (dh > d) d = dh;
+        /* written so that a NaN (inf - inf) wins: NaN travel fails every
+         * "cannot have changed" test, so the proxy is always looked at */
+        if (!(dl <= d)) d = dl;
+        if (!(dh <= d)) d = dh;
     }
     return d;
 }
