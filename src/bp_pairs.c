@@ -344,13 +344,17 @@ static mk_bp_pair pair_of(const mk_bp *bp, uint64_t key)
 
 static int pair_less(mk_bp_pair x, mk_bp_pair y) { return x.a < y.a || (x.a == y.a && x.b < y.b); }
 
-/* First index in set[from, n) not below p. */
+/* First index in set[from, n) not below p, galloping from `from`: events
+ * are sorted, so each search costs the log of the distance to the last. */
 static int lower_bound(const mk_bp_pair *set, int from, int n, mk_bp_pair p)
 {
-    while (from < n) {
-        int mid = from + (n - from) / 2;
+    int step = 1, hi = from;
+    while (hi < n && pair_less(set[hi], p)) { from = hi + 1; hi = from + step; step *= 2; }
+    if (hi > n) hi = n;
+    while (from < hi) {
+        int mid = from + (hi - from) / 2;
         if (pair_less(set[mid], p)) from = mid + 1;
-        else n = mid;
+        else hi = mid;
     }
     return from;
 }

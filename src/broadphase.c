@@ -155,7 +155,7 @@ mk_status mk_bp_create(const mk_bp_def *def, const mk_allocator *alloc, mk_bp **
 
 /* No NaN, lo <= hi, and no side that is infinite the wrong way (an AABB
  * starting at +inf or ending at -inf is empty, not a plane). */
-static mk_status check_box(mk_aabb b)
+static inline mk_status check_box(mk_aabb b)
 {
     const mk_real *lo = &b.lo.x, *hi = &b.hi.x;
     int k;
@@ -165,7 +165,7 @@ static mk_status check_box(mk_aabb b)
 }
 
 /* The slot of a live, not destroyed id, or -1. */
-static int slot_of(const mk_bp *bp, mk_bp_id id)
+static inline int slot_of(const mk_bp *bp, mk_bp_id id)
 {
     uint32_t slot = id >> 8;
     if (!bp || slot >= (uint32_t)bp->hi_slot) return -1;
@@ -174,7 +174,7 @@ static int slot_of(const mk_bp *bp, mk_bp_id id)
     return (int)slot;
 }
 
-static void mark_dirty(mk_bp *bp, uint32_t slot, uint8_t flag)
+static inline void mark_dirty(mk_bp *bp, uint32_t slot, uint8_t flag)
 {
     if (!(bp->flags[slot] & MK_PF_DIRTY)) {
         bp->flags[slot] |= MK_PF_DIRTY;
