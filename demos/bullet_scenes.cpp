@@ -21,6 +21,9 @@
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
 #include "minko_bullet.h"
+extern "C" {
+#include "support/oracle.h"
+}
 
 #include <algorithm>
 #include <chrono>
@@ -28,6 +31,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -90,6 +94,8 @@ struct Backend {
 const Backend kBackends[] = {
     {"native", false, false},
     {"minko_bp", true, false},
+    {"minko_np", false, true},
+    {"minko", true, true},
 };
 const int kBackendCount = (int)(sizeof kBackends / sizeof kBackends[0]);
 
@@ -99,6 +105,7 @@ mk_bp_kind g_bp_kind = MK_BP_AUTO;
 // Everything one world needs, built for one backend and torn down in reverse.
 struct Pipeline {
     btCollisionConfiguration *config = nullptr;
+    mkb::CollisionConfiguration *minko_config = nullptr;  // when the narrowphase is Minko's
     btCollisionDispatcher *dispatcher = nullptr;
     btBroadphaseInterface *broadphase = nullptr;
     btSequentialImpulseConstraintSolver *solver = nullptr;
@@ -106,7 +113,8 @@ struct Pipeline {
 
     explicit Pipeline(const Backend &b)
     {
-        config = new btDefaultCollisionConfiguration();
+        if (b.minko_narrowphase) config = minko_config = new mkb::CollisionConfiguration(mkb::Backend::minko);
+        else config = new btDefaultCollisionConfiguration();
         dispatcher = new btCollisionDispatcher(config);
         if (b.minko_broadphase) broadphase = new mkb::Broadphase(g_bp_kind);
         else broadphase = new btDbvtBroadphase();
@@ -534,6 +542,7 @@ struct Result {
     double max_penetration = 0, drift = -1, ke_end = 0;
     int tunnelled = 0, referee_failures = 0;
     double divergence = -1;                              // max |p - p_native| at the end
+    long minko_pairs = -1, native_pairs = -1;            // Minko narrowphase: algorithms on Minko / left to Bullet
     std::vector<btVector3> end_pos;
 };
 
@@ -555,9 +564,64 @@ double median(std::vector<double> v)
 bool is_dynamic(const btCollisionObject *o) { return !o->isStaticOrKinematicObject(); }
 
 // The referee: the deepest penetration among pairs whose tight AABBs overlap,
-// by Bullet's GJK-EPA on the shapes as Bullet defines them (margins included).
-// The same judge for every backend, so their contacts do not grade themselves.
-double referee_penetration(btCollisionWorld *world, int *failures)
+// on the solids as Bullet's support functions define them (sharp boxes,
+// hulls and cylinders grown by their margin). One judge for every backend, so
+// no backend grades its own contacts. Pairs with a hull go to Bullet's
+// GJK-EPA, which sees exactly that solid for hulls; all others to the exact
+// long double oracle (tests/support/oracle.h), because Bullet's GJK-EPA
+// rounds a box's corners by its margin.
+class Referee {
+public:
+    ~Referee()
+    {
+        for (auto &kv : m_shapes) {
+            if (kv.second.ok) mk_oracle_shape_free(&kv.second.shape);
+        }
+    }
+    // Penetration depth (>= 0) of a pair, or -1 when it cannot judge it.
+    double depth(const btCollisionObject *a, const btCollisionObject *b)
+    {
+        const btCollisionShape *sa = a->getCollisionShape(), *sb = b->getCollisionShape();
+        if (!sa->isConvex() && sa->getShapeType() != STATIC_PLANE_PROXYTYPE) return -1;
+        if (!sb->isConvex() && sb->getShapeType() != STATIC_PLANE_PROXYTYPE) return -1;
+        if (sa->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE || sb->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE) {
+            btGjkEpaSolver2::sResults r;
+            btVector3 guess = a->getWorldTransform().getOrigin() - b->getWorldTransform().getOrigin();
+            if (guess.length2() == 0) guess = btVector3(1, 0, 0);
+            if (!btGjkEpaSolver2::Penetration((const btConvexShape *)sa, a->getWorldTransform(), (const btConvexShape *)sb,
+                                              b->getWorldTransform(), guess, r, true))
+                return r.status == btGjkEpaSolver2::sResults::EPA_Failed ? -1 : 0;
+            return std::isfinite((double)r.distance) ? std::max(0.0, -(double)r.distance) : -1;
+        }
+        Entry *ea = entry(sa), *eb = entry(sb);
+        if (!ea || !eb) return -1;
+        mk_oracle_pose pa = mk_oracle_pose_of(mkb::minko_pose(a->getWorldTransform(), ea->map));
+        mk_oracle_pose pb = mk_oracle_pose_of(mkb::minko_pose(b->getWorldTransform(), eb->map));
+        mk_oracle_result r;
+        if (mk_oracle_query(&ea->shape, &pa, &eb->shape, &pb, 0, &r) != 0) return -1;
+        return std::max(0.0, -(double)r.distance);
+    }
+
+private:
+    struct Entry {
+        bool ok;
+        mkb::ShapeMap map;
+        mk_oracle_shape shape;
+    };
+    Entry *entry(const btCollisionShape *s)
+    {
+        auto it = m_shapes.find(s);
+        if (it == m_shapes.end()) {
+            Entry e;
+            e.ok = mkb::map_primitive(s, &e.map) == MK_OK && mk_oracle_shape_init(&e.shape, &e.map.shape) == 0;
+            it = m_shapes.insert(std::make_pair(s, e)).first;
+        }
+        return it->second.ok ? &it->second : nullptr;
+    }
+    std::map<const btCollisionShape *, Entry> m_shapes;
+};
+
+double referee_penetration(btCollisionWorld *world, Referee *referee, int *failures)
 {
     double deepest = 0;
     btBroadphasePairArray &pairs = world->getPairCache()->getOverlappingPairArray();
@@ -565,27 +629,13 @@ double referee_penetration(btCollisionWorld *world, int *failures)
         const btCollisionObject *a = (const btCollisionObject *)pairs[i].m_pProxy0->m_clientObject;
         const btCollisionObject *b = (const btCollisionObject *)pairs[i].m_pProxy1->m_clientObject;
         if (!is_dynamic(a) && !is_dynamic(b)) continue;
-        const btCollisionShape *sa = a->getCollisionShape(), *sb = b->getCollisionShape();
-        if (!sa->isConvex() || !sb->isConvex()) continue;
         btVector3 amin, amax, bmin, bmax;
-        sa->getAabb(a->getWorldTransform(), amin, amax);
-        sb->getAabb(b->getWorldTransform(), bmin, bmax);
+        a->getCollisionShape()->getAabb(a->getWorldTransform(), amin, amax);
+        b->getCollisionShape()->getAabb(b->getWorldTransform(), bmin, bmax);
         if (!TestAabbAgainstAabb2(amin, amax, bmin, bmax)) continue;
-        btGjkEpaSolver2::sResults r;
-        btVector3 guess = a->getWorldTransform().getOrigin() - b->getWorldTransform().getOrigin();
-        if (guess.length2() == 0) guess = btVector3(1, 0, 0);
-        // Penetration() with margins judges the full solids (sharp boxes, inflated
-        // hulls); SignedDistance() would judge the margin-free cores instead.
-        if (!btGjkEpaSolver2::Penetration((const btConvexShape *)sa, a->getWorldTransform(), (const btConvexShape *)sb,
-                                          b->getWorldTransform(), guess, r, true)) {
-            if (r.status == btGjkEpaSolver2::sResults::EPA_Failed) ++*failures;
-            continue;
-        }
-        if (!std::isfinite((double)r.distance)) {
-            ++*failures;
-            continue;
-        }
-        deepest = std::max(deepest, -(double)r.distance);
+        double d = referee->depth(a, b);
+        if (d < 0) ++*failures;
+        else deepest = std::max(deepest, d);
     }
     return deepest;
 }
@@ -642,6 +692,7 @@ Result run(const SceneSpec &scene, const Backend &backend, int steps)
     const int drift_step = scene.drift_from < 0 ? -1 : (int)(scene.drift_from * steps);
     std::vector<btVector3> drift_ref;
     std::vector<double> t_step, t_coll, t_bp;
+    Referee referee;
     double sum_pairs = 0, sum_manifolds = 0, sum_points = 0;
     for (int step = 0; step < steps; step++) {
         if (step == drift_step)
@@ -661,7 +712,7 @@ Result run(const SceneSpec &scene, const Backend &backend, int steps)
             sum_points += n;
         }
         if (step % scene.judge_every == 0 || step == steps - 1)
-            res.max_penetration = std::max(res.max_penetration, referee_penetration(world, &res.referee_failures));
+            res.max_penetration = std::max(res.max_penetration, referee_penetration(world, &referee, &res.referee_failures));
     }
     res.ms = median(t_step);
     res.collision_ms = median(t_coll);
@@ -672,6 +723,10 @@ Result run(const SceneSpec &scene, const Backend &backend, int steps)
     res.manifolds = sum_manifolds / steps;
     res.points = sum_points / steps;
     res.ke_end = kinetic_energy(bodies);
+    if (p.minko_config) {
+        res.minko_pairs = p.minko_config->stats.minko_algorithms.load();
+        res.native_pairs = p.minko_config->stats.native_fallbacks.load();
+    }
     if (drift_step >= 0) {
         res.drift = 0;
         for (size_t i = 0; i < bodies.size(); i++)
@@ -711,7 +766,10 @@ void print_row(const SceneSpec &s, const Result &r, const Result &native)
                 s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.bodies, r.steps, r.ms, r.collision_ms,
                 r.broadphase_ms, ratio, r.pairs, r.manifolds, r.points, r.max_penetration, drift, r.ke_end, r.tunnelled,
                 div);
-    if (r.referee_failures) std::printf("    (referee: %d GJK-EPA failures skipped)\n", r.referee_failures);
+    if (r.referee_failures) std::printf("    (referee: %d pairs it could not judge)\n", r.referee_failures);
+    if (r.minko_pairs >= 0 && r.native_pairs > 0)
+        std::printf("    (narrowphase: %ld pair algorithms on Minko, %ld left to Bullet by this build)\n", r.minko_pairs,
+                    r.native_pairs);
 }
 
 void write_json(FILE *f, const SceneSpec &s, const Result &r)
@@ -727,6 +785,8 @@ void write_json(FILE *f, const SceneSpec &s, const Result &r)
     if (r.drift >= 0) std::fprintf(f, ",\"drift\":%.6g", r.drift);
     if (r.divergence >= 0) std::fprintf(f, ",\"divergence_from_native\":%.6g", r.divergence);
     if (r.referee_failures) std::fprintf(f, ",\"failures\":%d", r.referee_failures);
+    if (r.minko_pairs >= 0)
+        std::fprintf(f, ",\"minko_algorithms\":%ld,\"native_fallbacks\":%ld", r.minko_pairs, r.native_pairs);
     std::fprintf(f, "}\n");
 }
 

@@ -18,7 +18,9 @@
  * near-callback pass incl. contact joints, total incl. QuickStep), candidate
  * pairs and contacts per step, maximum contact depth reported during the last
  * quarter of the run, geometric ground penetration over the same window,
- * kinetic energy at the end, drift, and tunnelled bodies.
+ * kinetic energy at the end, drift, and tunnelled bodies; for backends with
+ * Minko's narrowphase, the share of pairs Minko answered (the rest are class
+ * pairs the linked Minko build does not handle yet, which go to dCollide).
  */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
@@ -29,6 +31,9 @@
 #include <time.h>
 
 #include <ode/ode.h>
+
+#include "minko_ode.h"
+#include "support/oracle.h"
 
 /* ---- small utilities ---------------------------------------------------- */
 
@@ -77,7 +82,7 @@ static double median(double *v, int n)
 typedef void space_collide_fn(dSpaceID space, void *data, dNearCallback *cb);
 typedef int collide_fn(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip);
 
-enum space_kind { SPACE_HASH, SPACE_SAP };
+enum space_kind { SPACE_HASH, SPACE_SAP, SPACE_SIMPLE };
 
 typedef struct backend {
     const char *name;        /* the JSON `backend` key */
@@ -86,7 +91,10 @@ typedef struct backend {
     collide_fn *collide;
 } backend;
 
-/* The first backend is the reference of the `same` column. It is the SAP
+/* Minko's broadphase keeps its geoms in a dSimpleSpace, the container with
+ * no upkeep of its own (adapters.md B.2).
+ *
+ * The first backend is the reference of the `same` column. It is the SAP
  * space, not the hash space: ODE 0.16.2's dHashSpace misses overlapping
  * pairs in the level-0 cells at x = y = 0 whose z range crosses 0 (the
  * unsigned `getVirtualAddressBase(level, x, y) + zbegin` wraps when it is
@@ -95,12 +103,117 @@ typedef struct backend {
 static const backend BACKENDS[] = {
     {"ode.sap", SPACE_SAP, dSpaceCollide, dCollide},
     {"ode.hash", SPACE_HASH, dSpaceCollide, dCollide},
+    {"minko.bp", SPACE_SIMPLE, mk_ode_space_collide, dCollide},
+    {"minko.np", SPACE_SAP, dSpaceCollide, mk_ode_collide},
+    {"minko", SPACE_SIMPLE, mk_ode_space_collide, mk_ode_collide},
 };
 #define NBACKENDS ((int)(sizeof BACKENDS / sizeof BACKENDS[0]))
 
 /* ---- scenes -------------------------------------------------------------- */
 
-enum shape_kind { SH_SPHERE, SH_BOX };
+enum shape_kind { SH_SPHERE, SH_BOX, SH_HULL };
+
+/* ---- random convex hulls, as ODE convex data and as the exact reference ---- */
+
+/* The hull of 8 to 20 random points on an ellipsoid (semi-axes 0.12 to 0.35 m),
+ * shifted so the centre of mass of the solid is the origin (ODE wants the
+ * body origin there). Faces, planes and extreme vertices come from the
+ * oracle's brute-force long double hull, so native ODE and Minko collide the
+ * same solid and the depth reference is exact. */
+typedef struct hull_data {
+    int nv, nf;
+    dReal *points;             /* 3 nv */
+    dReal *planes;             /* 4 nf: n.x = d, outward unit n */
+    unsigned int *polygons;    /* per face: vertex count, then indices, counter-clockwise from outside */
+    double volume, extent[3];  /* for the (box-approximated) inertia */
+    mk_oracle_shape exact;
+} hull_data;
+
+static mk_lvec3 lv(long double x, long double y, long double z)
+{
+    mk_lvec3 v;
+    v.x = x;
+    v.y = y;
+    v.z = z;
+    return v;
+}
+
+static void hull_make(hull_data *h, rng *r)
+{
+    mk_lvec3 pts[20], apex = lv(0, 0, 0), com = lv(0, 0, 0);
+    mk_oracle_shape tmp;
+    const mk_oracle_poly *P;
+    double ax[3];
+    long double vol = 0;
+    int n = 8 + (int)(rng_unit(r) * 13), i, f, k, w;
+    for (k = 0; k < 3; k++) ax[k] = rng_range(r, 0.12, 0.35);
+    for (i = 0; i < n; i++) {
+        double d[3], l2;
+        do {
+            for (k = 0; k < 3; k++) d[k] = rng_range(r, -1, 1);
+            l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        } while (l2 < 1e-3 || l2 > 1);
+        l2 = sqrt(l2);
+        pts[i] = lv(ax[0] * d[0] / l2, ax[1] * d[1] / l2, ax[2] * d[2] / l2);
+    }
+    if (mk_oracle_shape_points(&tmp, pts, n, 0) != 0) {
+        fprintf(stderr, "ode_scenes: the oracle refused a random hull\n");
+        exit(2);
+    }
+    P = &tmp.core;
+    for (i = 0; i < P->nv; i++) apex = lv(apex.x + P->v[i].x / P->nv, apex.y + P->v[i].y / P->nv, apex.z + P->v[i].z / P->nv);
+    for (f = 0; f < P->nf; f++) { /* fan of tetrahedra from an interior point */
+        const mk_lvec3 *a = &P->v[P->face_vert[P->face_first[f]]];
+        for (k = P->face_first[f] + 1; k + 1 < P->face_first[f + 1]; k++) {
+            const mk_lvec3 *b = &P->v[P->face_vert[k]], *c = &P->v[P->face_vert[k + 1]];
+            mk_lvec3 u = lv(a->x - apex.x, a->y - apex.y, a->z - apex.z), v = lv(b->x - apex.x, b->y - apex.y, b->z - apex.z),
+                     t = lv(c->x - apex.x, c->y - apex.y, c->z - apex.z);
+            long double dv = (u.x * (v.y * t.z - v.z * t.y) - u.y * (v.x * t.z - v.z * t.x) + u.z * (v.x * t.y - v.y * t.x)) / 6;
+            vol += dv;
+            com = lv(com.x + dv * (apex.x + a->x + b->x + c->x) / 4, com.y + dv * (apex.y + a->y + b->y + c->y) / 4,
+                     com.z + dv * (apex.z + a->z + b->z + c->z) / 4);
+        }
+    }
+    com = lv(com.x / vol, com.y / vol, com.z / vol);
+    for (i = 0; i < P->nv; i++) pts[i] = lv(P->v[i].x - com.x, P->v[i].y - com.y, P->v[i].z - com.z);
+    if (mk_oracle_shape_points(&h->exact, pts, P->nv, 0) != 0) {
+        fprintf(stderr, "ode_scenes: the oracle refused a random hull\n");
+        exit(2);
+    }
+    mk_oracle_shape_free(&tmp);
+    P = &h->exact.core;
+    h->nv = P->nv;
+    h->nf = P->nf;
+    h->volume = (double)vol;
+    h->points = xrealloc(NULL, 3 * (size_t)h->nv * sizeof(dReal));
+    h->planes = xrealloc(NULL, 4 * (size_t)h->nf * sizeof(dReal));
+    h->polygons = xrealloc(NULL, ((size_t)h->nf + (size_t)P->face_first[P->nf]) * sizeof(unsigned int));
+    for (k = 0; k < 3; k++) h->extent[k] = 0;
+    for (i = 0; i < h->nv; i++) {
+        double c[3] = {(double)P->v[i].x, (double)P->v[i].y, (double)P->v[i].z};
+        for (k = 0; k < 3; k++) {
+            h->points[3 * i + k] = c[k];
+            if (2 * fabs(c[k]) > h->extent[k]) h->extent[k] = 2 * fabs(c[k]);
+        }
+    }
+    for (f = 0, w = 0; f < h->nf; f++) {
+        const mk_lvec3 *v0 = &P->v[P->face_vert[P->face_first[f]]];
+        h->planes[4 * f] = (dReal)P->fn[f].x;
+        h->planes[4 * f + 1] = (dReal)P->fn[f].y;
+        h->planes[4 * f + 2] = (dReal)P->fn[f].z;
+        h->planes[4 * f + 3] = (dReal)(P->fn[f].x * v0->x + P->fn[f].y * v0->y + P->fn[f].z * v0->z);
+        h->polygons[w++] = (unsigned int)(P->face_first[f + 1] - P->face_first[f]);
+        for (k = P->face_first[f]; k < P->face_first[f + 1]; k++) h->polygons[w++] = (unsigned int)P->face_vert[k];
+    }
+}
+
+static void hull_free(hull_data *h)
+{
+    free(h->points);
+    free(h->planes);
+    free(h->polygons);
+    mk_oracle_shape_free(&h->exact);
+}
 
 /* A dynamic body with one geom. dims: sphere radius; box full side lengths. */
 typedef struct body_rec {
@@ -108,6 +221,7 @@ typedef struct body_rec {
     dGeomID geom;
     enum shape_kind shape;
     double dims[3];
+    const hull_data *hull;
     double ref[3]; /* reference position for drift */
 } body_rec;
 
@@ -146,6 +260,7 @@ typedef struct sim {
     int step;
     double *t_space, *t_narrow, *t_total;
     long long cand_pairs, contacts;
+    long long minko_pairs, fallbacks; /* pairs Minko's narrowphase answered / handed to dCollide */
     double max_depth_late, ground_pen_late;
 } sim;
 
@@ -204,6 +319,25 @@ static body_rec *add_box(sim *s, const double pos[3], const dMatrix3 R, const do
     r->shape = SH_BOX;
     memcpy(r->dims, len, sizeof r->dims);
     attach(s, r, dCreateBox(s->space, len[0], len[1], len[2]), &m);
+    return r;
+}
+
+static dGeomID create_convex(sim *s, const hull_data *h)
+{
+    return dCreateConvex(s->space, h->planes, (unsigned int)h->nf, h->points, (unsigned int)h->nv, h->polygons);
+}
+
+/* The mass is the hull's, its inertia that of the hull's bounding box
+ * scaled to that mass: an approximation, the same for every backend. */
+static body_rec *add_hull(sim *s, const double pos[3], const dMatrix3 R, const hull_data *h, double density)
+{
+    body_rec *r = new_body(s, pos, R);
+    dMass m;
+    dMassSetBox(&m, 1, h->extent[0], h->extent[1], h->extent[2]);
+    dMassAdjust(&m, density * h->volume);
+    r->shape = SH_HULL;
+    r->hull = h;
+    attach(s, r, create_convex(s, h), &m);
     return r;
 }
 
@@ -330,6 +464,36 @@ static void build_mixed(sim *s, const scene *sc)
  * (x in [0, 0.1]), no gravity. WALL_SHOTS spheres per speed, their starting
  * distances staggered over one step's travel so every phase of the step is
  * sampled. A sphere whose centre ends beyond x = 0.1 went through. */
+/* The scenes' hulls, made once: ODE keeps pointers to the convex data. */
+#define NHULLS 20
+static hull_data hulls[NHULLS];
+
+/* 20 random hulls dropped from 1 cm onto a static box ground, in a 5 x 4
+ * grid 0.9 m apart (neighbours can meet when they tip over). */
+static void build_hulls(sim *s, const scene *sc)
+{
+    static const double ground_len[3] = {12, 12, 1}, ground_pos[3] = {0, 0, -0.5};
+    rng r = {0x5eed0004u};
+    int i, k;
+    (void)sc;
+    dWorldSetGravity(s->world, 0, 0, -9.81);
+    add_static_box(s, ground_pos, ground_len);
+    for (i = 0; i < NHULLS; i++) {
+        const hull_data *h = &hulls[i];
+        double pos[3], lo = HUGE_VAL;
+        dMatrix3 R;
+        dRFromAxisAndAngle(R, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 6.3);
+        for (k = 0; k < h->nv; k++) {
+            double z = R[8] * h->points[3 * k] + R[9] * h->points[3 * k + 1] + R[10] * h->points[3 * k + 2];
+            if (z < lo) lo = z;
+        }
+        pos[0] = (i % 5 - 2) * 0.9;
+        pos[1] = (i / 5 - 1.5) * 0.9;
+        pos[2] = 0.01 - lo;
+        add_hull(s, pos, R, h, 1000.0);
+    }
+}
+
 #define WALL_SHOTS 8
 static void build_wall(sim *s, const scene *sc)
 {
@@ -384,6 +548,7 @@ static int cmp_pair(const void *x, const void *y)
 }
 
 #define MAX_CONTACTS 16
+#define BIG_STEP_CONTACTS 100000
 
 static void contact_pair(sim *s, dGeomID o1, dGeomID o2, int late)
 {
@@ -407,6 +572,16 @@ static double lowest_z(const body_rec *r)
 {
     const dReal *p = dBodyGetPosition(r->body), *R = dBodyGetRotation(r->body);
     if (r->shape == SH_SPHERE) return p[2] - r->dims[0];
+    if (r->shape == SH_HULL) {
+        double lo = HUGE_VAL;
+        int i;
+        for (i = 0; i < r->hull->nv; i++) {
+            const dReal *q = &r->hull->points[3 * i];
+            double z = p[2] + R[8] * q[0] + R[9] * q[1] + R[10] * q[2];
+            if (z < lo) lo = z;
+        }
+        return lo;
+    }
     return p[2] - 0.5 * (fabs(R[8]) * r->dims[0] + fabs(R[9]) * r->dims[1] + fabs(R[10]) * r->dims[2]);
 }
 
@@ -415,6 +590,8 @@ static void sim_step(sim *s)
     const scene *sc = s->sc;
     int late = s->step >= sc->steps - sc->steps / 4;
     double t0, t1, t2, t3;
+    mk_ode_stats st0, st1;
+    long long contacts_before = s->contacts;
     size_t i;
 
     t0 = now_ms();
@@ -422,13 +599,25 @@ static void sim_step(sim *s)
     s->be->space_collide(s->space, s, collect_cb);
     t1 = now_ms();
     qsort(s->pairs, s->npairs, sizeof *s->pairs, cmp_pair);
+    mk_ode_get_stats(&st0);
     t2 = now_ms();
     for (i = 0; i < s->npairs; i++) contact_pair(s, s->geoms[s->pairs[i].a], s->geoms[s->pairs[i].b], late);
     t3 = now_ms();
+    mk_ode_get_stats(&st1);
+    s->minko_pairs += st1.collide_calls - st0.collide_calls;
+    s->fallbacks += st1.fallbacks - st0.fallbacks;
     dRandSetSeed(s->seed);
     dWorldQuickStep(s->world, sc->dt);
     s->seed = dRandGetSeed();
     dJointGroupEmpty(s->group);
+    if (s->contacts - contacts_before > BIG_STEP_CONTACTS) {
+        /* QuickStep keeps its working memory at the high-water mark; the
+         * stress scene's first steps (millions of contacts) would otherwise
+         * hold gigabytes in every world at once. */
+        dWorldCleanupWorkingMemory(s->world);
+        dJointGroupDestroy(s->group);
+        s->group = dJointGroupCreate(0);
+    }
     s->t_space[s->step] = t1 - t0;
     s->t_narrow[s->step] = t3 - t2;
     s->t_total[s->step] = now_ms() - t0;
@@ -454,7 +643,9 @@ static void sim_init(sim *s, const backend *be, const scene *sc)
     s->be = be;
     s->sc = sc;
     s->world = dWorldCreate();
-    s->space = be->space == SPACE_SAP ? dSweepAndPruneSpaceCreate(0, dSAP_AXES_XYZ) : dHashSpaceCreate(0);
+    s->space = be->space == SPACE_SAP    ? dSweepAndPruneSpaceCreate(0, dSAP_AXES_XYZ)
+               : be->space == SPACE_HASH ? dHashSpaceCreate(0)
+                                         : dSimpleSpaceCreate(0);
     s->group = dJointGroupCreate(0);
     s->seed = 0;
     dWorldSetQuickStepNumIterations(s->world, sc->iterations);
@@ -467,6 +658,7 @@ static void sim_init(sim *s, const backend *be, const scene *sc)
 static void sim_free(sim *s)
 {
     dJointGroupDestroy(s->group);
+    mk_ode_space_forget(s->space);
     dSpaceDestroy(s->space);
     dWorldDestroy(s->world);
     free(s->bodies);
@@ -483,6 +675,7 @@ typedef struct metrics {
     double ms_total, ms_collision, ms_space, ms_narrow;
     double pairs_per_step, contacts_per_step;
     double max_depth, ground_pen, ke_end, drift;
+    double minko_share; /* of the pairs the narrowphase saw, the fraction Minko answered */
     int tunnelled;
 } metrics;
 
@@ -515,6 +708,7 @@ static metrics sim_metrics(sim *s)
     free(coll);
     m.pairs_per_step = (double)s->cand_pairs / sc->steps;
     m.contacts_per_step = (double)s->contacts / sc->steps;
+    m.minko_share = s->minko_pairs + s->fallbacks ? (double)s->minko_pairs / (double)(s->minko_pairs + s->fallbacks) : 0;
     m.max_depth = s->max_depth_late;
     m.ground_pen = s->ground_pen_late;
     for (i = 0; i < s->nbodies; i++) {
@@ -549,15 +743,17 @@ static void print_header(const scene *sc, int nbodies)
 {
     printf("\n%s %s: %d bodies, %d steps of %g s (ms are medians per step)\n", sc->name, sc->variant, nbodies,
            sc->steps, sc->dt);
-    printf("  %-10s %8s %8s %8s %8s %9s %9s %9s %9s %10s %9s %4s %4s\n", "backend", "total", "collide", "space",
-           "narrow", "pairs", "contacts", "depth", "ground", "ke_end", "drift", "tun", "same");
+    printf("  %-10s %8s %8s %8s %8s %9s %9s %9s %9s %10s %9s %4s %4s %6s\n", "backend", "total", "collide", "space",
+           "narrow", "pairs", "contacts", "depth", "ground", "ke_end", "drift", "tun", "same", "minko");
 }
 
 static void print_row(const sim *s, const metrics *m, int same)
 {
-    printf("  %-10s %8.3f %8.3f %8.3f %8.3f %9.1f %9.1f %9.2e %9.2e %10.3e %9.2e %4d %4s\n", s->be->name, m->ms_total,
+    char share[16] = "-";
+    if (s->be->collide != dCollide) snprintf(share, sizeof share, "%.0f%%", 100 * m->minko_share);
+    printf("  %-10s %8.3f %8.3f %8.3f %8.3f %9.1f %9.1f %9.2e %9.2e %10.3e %9.2e %4d %4s %6s\n", s->be->name, m->ms_total,
            m->ms_collision, m->ms_space, m->ms_narrow, m->pairs_per_step, m->contacts_per_step, m->max_depth,
-           m->ground_pen, m->ke_end, m->drift, m->tunnelled, same ? "yes" : "no");
+           m->ground_pen, m->ke_end, m->drift, m->tunnelled, same ? "yes" : "no", share);
 }
 
 static void json_row(FILE *f, const sim *s, const metrics *m, int same)
@@ -569,10 +765,12 @@ static void json_row(FILE *f, const sim *s, const metrics *m, int same)
             "\"dt\":%g,\"ms_per_frame\":%.6g,\"collision_ms_per_frame\":%.6g,\"space_ms_per_frame\":%.6g,"
             "\"narrow_ms_per_frame\":%.6g,\"candidate_pairs_per_frame\":%.6g,\"contacts_per_frame\":%.6g,"
             "\"max_penetration\":%.6g,\"ground_penetration\":%.6g,\"ke_end\":%.6g,\"drift\":%.6g,\"tunnelled\":%d,"
-            "\"same_end_state_as\":\"%s\",\"same_end_state\":%s}\n",
+            "\"same_end_state_as\":\"%s\",\"same_end_state\":%s",
             sc->name, sc->variant, s->be->name, sc->steps, s->nbodies, sc->dt, m->ms_total, m->ms_collision,
             m->ms_space, m->ms_narrow, m->pairs_per_step, m->contacts_per_step, m->max_depth, m->ground_pen,
             m->ke_end, m->drift, m->tunnelled, BACKENDS[0].name, same ? "true" : "false");
+    if (s->be->collide != dCollide) fprintf(f, ",\"minko_narrowphase_share\":%.6g", m->minko_share);
+    fprintf(f, "}\n");
     fflush(f);
 }
 
@@ -593,6 +791,151 @@ static void run_case(const scene *sc, FILE *json)
         json_row(json, &sims[b], &m, same);
     }
     for (b = 0; b < NBACKENDS; b++) sim_free(&sims[b]);
+}
+
+/* ---- hull-hull penetration depth against the exact reference ---- */
+
+typedef struct depth_case {
+    int a, b;
+    dMatrix3 Ra, Rb;
+    double pa[3], pb[3];
+    double depth;       /* exact, > 0 */
+    mk_lvec3 normal;    /* exact, from a towards b */
+    int normal_defined;
+} depth_case;
+
+static mk_oracle_pose oracle_pose(const dMatrix3 R, const double p[3])
+{
+    mk_oracle_pose x;
+    int i, j;
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) x.r[i][j] = R[4 * i + j];
+    x.p = lv(p[0], p[1], p[2]);
+    return x;
+}
+
+/* Random poses of random pairs of the scene's hulls, kept when the exact
+ * answer says they penetrate (deeply or barely). */
+static int make_depth_cases(depth_case *out, int m)
+{
+    rng r = {0x5eed0005u};
+    int k = 0;
+    while (k < m) {
+        depth_case *c = &out[k];
+        mk_oracle_pose xa, xb;
+        mk_oracle_result res;
+        double d[3], l2, dist;
+        int i;
+        c->a = (int)(rng_unit(&r) * NHULLS);
+        c->b = (int)(rng_unit(&r) * NHULLS);
+        dRFromAxisAndAngle(c->Ra, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 6.3);
+        dRFromAxisAndAngle(c->Rb, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 2 - 1, rng_unit(&r) * 6.3);
+        do {
+            for (i = 0; i < 3; i++) d[i] = rng_range(&r, -1, 1);
+            l2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        } while (l2 < 1e-3 || l2 > 1);
+        dist = rng_range(&r, 0.2, 1.0) * (double)(hulls[c->a].exact.size + hulls[c->b].exact.size) / sqrt(l2);
+        c->pa[0] = 5;
+        c->pa[1] = -3;
+        c->pa[2] = 2;
+        for (i = 0; i < 3; i++) c->pb[i] = c->pa[i] + d[i] * dist;
+        xa = oracle_pose(c->Ra, c->pa);
+        xb = oracle_pose(c->Rb, c->pb);
+        if (mk_oracle_query(&hulls[c->a].exact, &xa, &hulls[c->b].exact, &xb, 0, &res) != 0 || !(res.distance < -1e-9L))
+            continue;
+        c->depth = (double)-res.distance;
+        c->normal = res.normal;
+        c->normal_defined = res.normal_defined;
+        k++;
+    }
+    return m;
+}
+
+static double percentile(const double *v, int n, double q)
+{
+    double *w = xrealloc(NULL, (size_t)n * sizeof *w), x;
+    int i = (int)ceil(q * n) - 1;
+    memcpy(w, v, (size_t)n * sizeof *w);
+    qsort(w, (size_t)n, sizeof *w, cmp_double);
+    x = w[i < 0 ? 0 : i];
+    free(w);
+    return x;
+}
+
+/* One backend over all cases: depth = deepest contact, normal = its normal
+ * (ODE's points from b into a, so it is compared with minus the exact one). */
+static void run_depth_backend(const char *name, collide_fn *collide, const depth_case *cases, int m, FILE *json)
+{
+    double *err = xrealloc(NULL, (size_t)m * sizeof *err), *nerr = xrealloc(NULL, (size_t)m * sizeof *nerr);
+    double best = HUGE_VAL;
+    int k, rep, failures = 0, nn = 0;
+    dGeomID g[NHULLS];
+    for (k = 0; k < NHULLS; k++)
+        g[k] = dCreateConvex(0, hulls[k].planes, (unsigned int)hulls[k].nf, hulls[k].points, (unsigned int)hulls[k].nv,
+                             hulls[k].polygons);
+    for (rep = 0; rep < 3; rep++) {
+        double t0 = now_ms();
+        for (k = 0; k < m; k++) {
+            const depth_case *c = &cases[k];
+            dContactGeom ct[MAX_CONTACTS];
+            dGeomID ga = g[c->a], gb = g[c->b];
+            int n, i, deepest = 0;
+            if (c->a == c->b) { /* a hull against a copy of itself */
+                gb = dCreateConvex(0, hulls[c->b].planes, (unsigned int)hulls[c->b].nf, hulls[c->b].points,
+                                   (unsigned int)hulls[c->b].nv, hulls[c->b].polygons);
+            }
+            dGeomSetPosition(ga, c->pa[0], c->pa[1], c->pa[2]);
+            dGeomSetRotation(ga, c->Ra);
+            dGeomSetPosition(gb, c->pb[0], c->pb[1], c->pb[2]);
+            dGeomSetRotation(gb, c->Rb);
+            n = collide(ga, gb, MAX_CONTACTS, ct, (int)sizeof ct[0]);
+            if (c->a == c->b) dGeomDestroy(gb);
+            if (rep) continue;
+            for (i = 1; i < n; i++)
+                if (ct[i].depth > ct[deepest].depth) deepest = i;
+            if (n <= 0 || !(ct[deepest].depth > 0)) {
+                failures++;
+                err[k] = 1;
+                nerr[k] = 180;
+                continue;
+            }
+            err[k] = fabs(ct[deepest].depth - c->depth) / c->depth;
+            nerr[k] = c->normal_defined
+                          ? (double)mk_oracle_angle_deg(c->normal, -ct[deepest].normal[0], -ct[deepest].normal[1], -ct[deepest].normal[2])
+                          : 0;
+            nn++;
+        }
+        if (rep) {
+            double t = (now_ms() - t0) * 1e6 / m;
+            if (t < best) best = t;
+        }
+    }
+    printf("  %-14s %9.0f %10.2e %10.2e %10.2e %10.2e %10.2e %8d\n", name, best, percentile(err, m, 0.5),
+           percentile(err, m, 0.99), percentile(err, m, 1.0), percentile(nerr, m, 0.99), percentile(nerr, m, 1.0), failures);
+    if (json)
+        fprintf(json,
+                "{\"suite\":\"ode\",\"case\":\"hull_depth\",\"variant\":\"penetrating\",\"backend\":\"%s\",\"n\":%d,"
+                "\"ns_per_query\":%.6g,\"rel_err_p50\":%.6g,\"rel_err_p99\":%.6g,\"rel_err_max\":%.6g,"
+                "\"normal_err_deg_p99\":%.6g,\"normal_err_deg_max\":%.6g,\"failures\":%d}\n",
+                name, m, best, percentile(err, m, 0.5), percentile(err, m, 0.99), percentile(err, m, 1.0),
+                percentile(nerr, m, 0.99), percentile(nerr, m, 1.0), failures);
+    for (k = 0; k < NHULLS; k++) dGeomDestroy(g[k]);
+    free(err);
+    free(nerr);
+    (void)nn;
+}
+
+static void run_hull_depth(int quick, FILE *json)
+{
+    int m = quick ? 300 : 3000;
+    depth_case *cases = xrealloc(NULL, (size_t)m * sizeof *cases);
+    make_depth_cases(cases, m);
+    printf("\nhull_depth penetrating: %d random poses of the hull scene's hulls, depth and normal of the deepest contact\n"
+           "against the exact (long double brute-force SAT) reference\n", m);
+    printf("  %-14s %9s %10s %10s %10s %10s %10s %8s\n", "backend", "ns/query", "err_p50", "err_p99", "err_max", "deg_p99",
+           "deg_max", "failures");
+    run_depth_backend("ode.dCollide", dCollide, cases, m, json);
+    free(cases);
 }
 
 #define MAXCASES 16
@@ -618,6 +961,10 @@ static int make_cases(scene *out, int quick)
     out[k].name = "pyramid"; out[k].build = build_pyramid; out[k].n = 20;
     out[k].steps = quick ? 60 : 600; out[k].dt = 1.0 / 60; out[k].iterations = 20; out[k].max_contacts = 4;
     out[k].surface = stack_surf; out[k].ground = 1; out[k].drift = DRIFT_FROM_START;
+    k++;
+    out[k].name = "hulls"; out[k].build = build_hulls; out[k].n = NHULLS;
+    out[k].steps = quick ? 120 : 600; out[k].dt = 1.0 / 60; out[k].iterations = 20; out[k].max_contacts = 4;
+    out[k].surface = stack_surf; out[k].ground = 1; out[k].drift = DRIFT_FROM_MID;
     k++;
     out[k].name = "mixed"; out[k].build = build_mixed; out[k].n = 80;
     out[k].steps = quick ? 60 : 600; out[k].dt = 1.0 / 60; out[k].iterations = 20; out[k].max_contacts = 4;
@@ -654,7 +1001,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--scene") && i + 1 < argc)
             only = argv[++i];
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--scene stress|tower|pyramid|mixed|wall]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--scene stress|tower|pyramid|hulls|mixed|wall|hull_depth]\n", argv[0]);
             return 2;
         }
     }
@@ -663,12 +1010,18 @@ int main(int argc, char **argv)
         return 2;
     }
     dInitODE2(0);
-    printf("ode_scenes: ODE %s scenes, native dHashSpace / dSweepAndPruneSpace%s\n",
+    printf("ode_scenes: ODE %s scenes, native spaces and colliders against Minko's%s\n",
            dCheckConfiguration("ODE_double_precision") ? "double" : "single", quick ? " (quick)" : "");
+    {
+        rng r = {0x5eed0006u};
+        for (i = 0; i < NHULLS; i++) hull_make(&hulls[i], &r);
+    }
     ncases = make_cases(cases, quick);
     for (i = 0; i < ncases; i++)
         if (!only || !strcmp(only, cases[i].name)) run_case(&cases[i], json);
-    dCloseODE();
+    if (!only || !strcmp(only, "hull_depth")) run_hull_depth(quick, json);
+    for (i = 0; i < NHULLS; i++) hull_free(&hulls[i]);
+    mk_ode_close();
     if (json) fclose(json);
     return 0;
 }

@@ -29,10 +29,10 @@ $(MKB_LIB): $(MKB_OBJS)
 	$(Q)$(AR) rcs $@ $^
 
 # The adapter's Check suite, run by `make check` in every variant.
-$(B)/adapters/bullet/test_minko_bullet: adapters/bullet/test_minko_bullet.cpp $(MKB_LIB) $(STATIC_LIB)
+$(B)/adapters/bullet/test_minko_bullet: adapters/bullet/test_minko_bullet.cpp $(MKB_LIB) $(STATIC_LIB) $(TSUP_OBJS)
 	@mkdir -p $(@D)
 	$(say) CXXLD $@
-	$(Q)$(CXX) $(MKB_CXXFLAGS) -Itests $(CHECK_CFLAGS) -MMD -MP $< $(MKB_LIB) $(STATIC_LIB) $(LDSAN) $(LDFLAGS) $(BULLET_LIBS) $(CHECK_LIBS) -lm -o $@
+	$(Q)$(CXX) $(MKB_CXXFLAGS) -Itests $(CHECK_CFLAGS) -MMD -MP $< $(TSUP_OBJS) $(MKB_LIB) $(STATIC_LIB) $(LDSAN) $(LDFLAGS) $(BULLET_LIBS) $(CHECK_LIBS) -lm -o $@
 
 -include $(MKB_OBJS:.o=.d) $(B)/adapters/bullet/test_minko_bullet.d
 CHECK_BINS += $(B)/adapters/bullet/test_minko_bullet

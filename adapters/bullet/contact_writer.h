@@ -10,9 +10,11 @@
 // sees it (wrapper 0 = A, wrapper 1 = B). The keys travel in the points'
 // m_partId0/m_partId1 (feature of body 0 / body 1 of the manifold) and
 // m_index0/m_index1 keep the wrappers' own indices; this is only done when
-// both wrappers leave their part ids free (-1), i.e. outside meshes, where
-// Bullet itself uses them for triangle ids. Otherwise every point goes through
-// btManifoldResult::addContactPoint and Bullet's distance matching. Everything
+// the algorithm owns the manifold (a compound or mesh parent shares one
+// manifold among all its children, which compete for its four slots) and both
+// wrappers leave their part ids free (-1; meshes use them for triangle ids).
+// Otherwise every point goes through btManifoldResult::addContactPoint and
+// Bullet's distance matching, as Bullet's own algorithms do. Everything
 // btManifoldResult::addContactPoint does is reproduced: breaking-threshold
 // cut, local anchors on the collision objects, swapped manifolds, combined
 // friction / restitution / rolling / spinning friction and contact
@@ -37,7 +39,8 @@ struct PairContact {
 };
 
 // At most MANIFOLD_CACHE_SIZE (4) points; extra points are ignored.
-void write_contacts(btManifoldResult *result, const PairContact *points, int count);
+// `owned`: the manifold belongs to this pair alone.
+void write_contacts(btManifoldResult *result, const PairContact *points, int count, bool owned = true);
 
 }  // namespace mkb
 

@@ -16,9 +16,12 @@
 
 #include <btBulletCollisionCommon.h>
 
+#include <atomic>
+#include <map>
 #include <vector>
 
 #include "minko/broadphase.h"
+#include "minko/manifold.h"
 #include "minko/shape.h"
 
 static_assert(sizeof(btScalar) == sizeof(mk_real),
@@ -26,6 +29,9 @@ static_assert(sizeof(btScalar) == sizeof(mk_real),
               "bullet-float64 (BT_USE_DOUBLE_PRECISION) and PRECISION=single with bullet");
 
 namespace mkb {
+
+// Which collision code a world runs: Bullet's own or Minko's.
+enum class Backend { native, minko };
 
 // A Bullet shape seen by Minko: the Minko shape and the rotation that takes
 // Minko's local frame into the Bullet shape's local frame (identity except for
@@ -123,6 +129,70 @@ private:
     const btOverlapFilterCallback *m_filter_seen = nullptr;
     mk_status m_error = MK_OK;
 };
+
+// A btDefaultCollisionConfiguration whose dispatcher runs Minko's contact
+// manifolds (mk_collide) for every pair of sphere, box, capsule X/Y/Z,
+// cylinder X/Y/Z, cone X/Y/Z, convex hull and static plane (both orders;
+// plane-plane excluded) and Bullet's own algorithms for everything else
+// (meshes, compounds, soft bodies) and for any pair this build of Minko
+// refuses (a module left out, a shape Minko rejects): the choice is made per
+// pair when its algorithm is created. Each Minko algorithm writes the whole
+// manifold every step in Bullet's conventions (normal on B pointing from B to
+// A, point on B, negative distance = penetration, points up to the manifold's
+// contact breaking threshold apart kept as speculative contacts) and matches
+// points to the cached ones by Minko feature ID, so m_appliedImpulse follows
+// its contact (contact_writer.h). Hull shapes are converted once per shape and
+// cached here, keyed by the shape (a btConvexHullShape must not change its
+// points while this configuration uses it, as with Bullet's polyhedral
+// features). m_customCollisionAlgorithmMaxElementSize is raised to fit the
+// Minko algorithm. Closest-point queries (contactTest) stay Bullet's.
+// Backend::native makes this exactly btDefaultCollisionConfiguration;
+// set_narrowphase() switches a running world.
+class CollisionConfiguration : public btDefaultCollisionConfiguration {
+public:
+    explicit CollisionConfiguration(Backend narrowphase = Backend::minko,
+                                    const btDefaultCollisionConstructionInfo &info = btDefaultCollisionConstructionInfo());
+    ~CollisionConfiguration() override;
+    CollisionConfiguration(const CollisionConfiguration &) = delete;
+    CollisionConfiguration &operator=(const CollisionConfiguration &) = delete;
+
+    btCollisionAlgorithmCreateFunc *getCollisionAlgorithmCreateFunc(int proxyType0, int proxyType1) override;
+
+    Backend narrowphase() const { return m_backend; }
+    // Takes effect for dispatchers built afterwards; see set_narrowphase() for a running world.
+    void set_backend(Backend b) { m_backend = b; }
+    // Shapes of the types above, hulls through the cache. MK_ERR_UNSUPPORTED otherwise.
+    mk_status map_shape(const btCollisionShape *shape, ShapeMap *out);
+    // Bullet's own create function for a pair of shape types.
+    btCollisionAlgorithmCreateFunc *native_create_func(int proxyType0, int proxyType1)
+    {
+        return btDefaultCollisionConfiguration::getCollisionAlgorithmCreateFunc(proxyType0, proxyType1);
+    }
+    // Whether mk_collide handles this pair of mapped shapes in this build.
+    static bool minko_handles(const ShapeMap &a, const ShapeMap &b);
+
+    struct Stats {
+        std::atomic<long> minko_algorithms{0};  // pair algorithms created on Minko
+        std::atomic<long> native_fallbacks{0};  // pairs of Minko-registered types left to Bullet
+        std::atomic<long> collide_errors{0};    // mk_collide calls that failed (no contacts that step)
+    };
+    Stats stats;
+
+private:
+    struct CreateFunc;
+    Backend m_backend;
+    CreateFunc *m_create;
+};
+
+// True for the shape types the Minko narrowphase is registered for.
+bool minko_shape_type(int proxyType);
+
+// Switch a running world's narrowphase: re-registers the dispatcher's create
+// functions for Minko's shape types and drops every pair's algorithm (their
+// manifolds and warm-start state go with them), so the next step builds new
+// ones. The world's dispatcher must be a btCollisionDispatcher built on an
+// mkb::CollisionConfiguration; returns false otherwise.
+bool set_narrowphase(btCollisionWorld *world, Backend b);
 
 }  // namespace mkb
 

@@ -12,6 +12,9 @@
 #include "contact_writer.h"
 #include "minko_bullet.h"
 #include "support/mk_test.h"
+extern "C" {
+#include "support/oracle.h"
+}
 
 namespace {
 
@@ -722,6 +725,284 @@ START_TEST(bp_bad_input_and_reset)
 }
 END_TEST
 
+
+// ---- the narrowphase ----------------------------------------------------------
+
+struct PointOut {
+    btVector3 normal_on_b, on_a, on_b;
+    double distance;
+    int part0, part1;
+};
+
+// One processCollision of the pair (a at xa, b at xb) through a dispatcher
+// built on `config`; returns the manifold's points.
+std::vector<PointOut> collide_once(btCollisionConfiguration *config, btCollisionShape *a, const btTransform &xa,
+                                   btCollisionShape *b, const btTransform &xb, bool *minko_algorithm = nullptr)
+{
+    btCollisionDispatcher dispatcher(config);
+    btCollisionObject oa, ob;
+    oa.setCollisionShape(a);
+    ob.setCollisionShape(b);
+    oa.setWorldTransform(xa);
+    ob.setWorldTransform(xb);
+    btCollisionObjectWrapper wa(nullptr, a, &oa, xa, -1, -1), wb(nullptr, b, &ob, xb, -1, -1);
+    mkb::CollisionConfiguration *mine = dynamic_cast<mkb::CollisionConfiguration *>(config);
+    long before = mine ? mine->stats.minko_algorithms.load() : 0;
+    btCollisionAlgorithm *algo = dispatcher.findAlgorithm(&wa, &wb, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+    if (minko_algorithm) *minko_algorithm = mine && mine->stats.minko_algorithms.load() > before;
+    btManifoldResult result(&wa, &wb);
+    btDispatcherInfo info;
+    algo->processCollision(&wa, &wb, info, &result);
+    std::vector<PointOut> out;
+    btManifoldArray manifolds;
+    algo->getAllContactManifolds(manifolds);
+    for (int m = 0; m < manifolds.size(); m++) {
+        // A manifold's normal is on its body 1 pointing to its body 0; Bullet's
+        // convex-plane algorithm orders its manifold (convex, plane) whatever
+        // the pair order. Report everything in the (a, b) order asked for.
+        const bool swapped = manifolds[m]->getBody0() != &oa;
+        for (int i = 0; i < manifolds[m]->getNumContacts(); i++) {
+            const btManifoldPoint &p = manifolds[m]->getContactPoint(i);
+            PointOut o = {swapped ? -p.m_normalWorldOnB : p.m_normalWorldOnB,
+                          swapped ? p.getPositionWorldOnB() : p.getPositionWorldOnA(),
+                          swapped ? p.getPositionWorldOnA() : p.getPositionWorldOnB(), (double)p.getDistance(),
+                          swapped ? p.m_partId1 : p.m_partId0, swapped ? p.m_partId0 : p.m_partId1};
+            out.push_back(o);
+        }
+    }
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
+    return out;
+}
+
+const PointOut *deepest(const std::vector<PointOut> &v)
+{
+    const PointOut *best = nullptr;
+    for (const PointOut &p : v)
+        if (!best || p.distance < best->distance) best = &p;
+    return best;
+}
+
+btTransform random_pose(mk_rng *rng, double spread)
+{
+    mk_quat q = mk_rng_quat(rng);
+    return btTransform(btQuaternion((btScalar)q.x, (btScalar)q.y, (btScalar)q.z, (btScalar)q.w),
+                       btVector3((btScalar)mk_rng_range(rng, -spread, spread), (btScalar)mk_rng_range(rng, -spread, spread),
+                                 (btScalar)mk_rng_range(rng, -spread, spread)));
+}
+
+#if defined(BT_USE_DOUBLE_PRECISION)
+const double kContactTol = 1e-9, kNormalTol = 1e-9;
+#else
+const double kContactTol = 2e-4, kNormalTol = 1e-5;
+#endif
+
+// The exact signed distance and normal of two Bullet convex shapes, by the
+// long double brute-force oracle on the mapped shapes (the mapping itself is
+// checked against Bullet's support functions by the shape tests).
+bool oracle_reference(const btCollisionShape *a, const btTransform &xa, const btCollisionShape *b, const btTransform &xb,
+                      PointOut *out)
+{
+    mkb::ShapeMap ma, mb;
+    if (mkb::map_primitive(a, &ma) != MK_OK || mkb::map_primitive(b, &mb) != MK_OK) return false;
+    mk_oracle_result r;
+    if (mk_oracle_distance(&ma.shape, mkb::minko_pose(xa, ma), &mb.shape, mkb::minko_pose(xb, mb), &r) != 0 ||
+        !r.normal_defined)
+        return false;
+    out->normal_on_b = -btVector3((btScalar)r.normal.x, (btScalar)r.normal.y, (btScalar)r.normal.z);
+    out->distance = (double)r.distance;
+    return true;
+}
+
+// Minko's contacts in Bullet's conventions agree with Bullet on the same poses:
+// the deepest point has the same signed distance and normal (normal on B
+// pointing from B to A, negative = penetration), every point satisfies
+// on_a = on_b + normal * distance with one normal per manifold. The
+// reference is Bullet's own algorithm where it models the same solids
+// (sphere-sphere, capsule pairs, shape-plane, box-box by btBoxBoxDetector),
+// and the exact oracle where Bullet's algorithm rounds the box by its margin
+// instead (btSphereBoxCollisionAlgorithm, GJK and EPA see a box rounded by
+// its margin; the shape's support function, its AABB and box-box see the
+// sharp box, which is what Minko models).
+START_TEST(np_conventions_match_bullet)
+{
+    btDefaultCollisionConfiguration native;
+    mkb::CollisionConfiguration mine;
+    btSphereShape sphere(btScalar(0.6));
+    btBoxShape box(btVector3(btScalar(0.8), btScalar(0.5), btScalar(0.3)));
+    btCapsuleShape capsule(btScalar(0.3), btScalar(0.8));
+    btCapsuleShapeZ capsule_z(btScalar(0.25), btScalar(0.5));
+    btStaticPlaneShape plane(btVector3(0, 1, 0), btScalar(0.2));
+    struct Case {
+        const char *name;
+        btCollisionShape *a, *b;
+        bool bullet_same_solid;  // false: compare with the oracle on the sharp solids
+        bool closed_form;        // Minko answers it in every build
+    } cases[] = {
+        {"sphere-sphere", &sphere, &sphere, true, true},       {"sphere-box", &sphere, &box, false, true},
+        {"box-sphere", &box, &sphere, false, true},            {"capsule-sphere", &capsule, &sphere, true, true},
+        {"capsule-capsule", &capsule, &capsule_z, true, true}, {"box-capsule", &box, &capsule, false, true},
+        {"capsule-box", &capsule_z, &box, false, true},        {"sphere-plane", &sphere, &plane, true, true},
+        {"plane-box", &plane, &box, true, true},               {"capsule-plane", &capsule, &plane, true, true},
+        {"box-box", &box, &box, true, false},
+    };
+    mk_rng rng = {777};
+    int compared = 0;
+    for (const Case &c : cases) {
+        int minko_used = 0;
+        for (int k = 0; k < 200; k++) {
+            btTransform xa = random_pose(&rng, 0.6), xb = random_pose(&rng, 0.6);
+            if (c.a == &plane) xa.setIdentity();
+            if (c.b == &plane) xb.setIdentity();
+            bool used_minko = false;
+            std::vector<PointOut> got = collide_once(&mine, c.a, xa, c.b, xb, &used_minko);
+            if (!used_minko) continue;  // left to Bullet in this build (e.g. box-box before SAT)
+            minko_used++;
+            PointOut ref = {btVector3(0, 0, 0), btVector3(0, 0, 0), btVector3(0, 0, 0), 0, -1, -1};
+            bool have_ref;
+            double tol;
+            if (c.bullet_same_solid) {
+                std::vector<PointOut> r = collide_once(&native, c.a, xa, c.b, xb);
+                have_ref = !r.empty();
+                if (have_ref) ref = *deepest(r);
+                tol = kContactTol;
+            } else {
+                have_ref = oracle_reference(c.a, xa, c.b, xb, &ref);
+                tol = kContactTol;
+            }
+            const PointOut *g = deepest(got);
+            if (!have_ref || ref.distance > -1e-3) continue;  // compare clear penetrations only
+            ck_assert_msg(g != nullptr, "%s pose %d: Bullet finds depth %g, Minko no contact", c.name, k, ref.distance);
+            ck_assert_msg(std::fabs(ref.distance - g->distance) <= tol, "%s pose %d: distance Bullet %.12g Minko %.12g",
+                          c.name, k, ref.distance, g->distance);
+            ck_assert_msg(ref.normal_on_b.dot(g->normal_on_b) >= 1 - 1e-6, "%s pose %d: normals differ: Bullet %g %g %g Minko %g %g %g (d %g %g)", c.name, k, (double)ref.normal_on_b.x(), (double)ref.normal_on_b.y(), (double)ref.normal_on_b.z(), (double)g->normal_on_b.x(), (double)g->normal_on_b.y(), (double)g->normal_on_b.z(), ref.distance, g->distance);
+            for (const PointOut &p : got) {
+                btVector3 gap = p.on_a - (p.on_b + p.normal_on_b * (btScalar)p.distance);
+                ck_assert_msg(gap.length() <= 1e-5, "%s pose %d: on_a != on_b + n d", c.name, k);
+                ck_assert_msg(p.normal_on_b.dot(g->normal_on_b) >= 1 - kNormalTol, "%s: one normal per manifold", c.name);
+            }
+            compared++;
+        }
+        if (c.closed_form) ck_assert_msg(minko_used == 200, "%s: left to Bullet", c.name);
+    }
+    ck_assert_int_gt(compared, 500);
+}
+END_TEST
+
+// A world on the Minko narrowphase: boxes, spheres and capsules settle on a
+// static plane; a box resting flat carries its weight on four points whose
+// features stay the same from step to step (lifetimes grow, warm starting
+// holds), and a sphere on a triangle mesh (left to Bullet) does not fall
+// through.
+START_TEST(np_world_rests_on_minko_contacts)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld world(&dispatcher, &bp, &solver, &config);
+    world.setGravity(btVector3(0, -10, 0));
+    btStaticPlaneShape ground(btVector3(0, 1, 0), 0);
+    btBoxShape box(btVector3(btScalar(0.5), btScalar(0.25), btScalar(0.5)));
+    btSphereShape ball(btScalar(0.3));
+    btCapsuleShapeX cap(btScalar(0.2), btScalar(0.6));
+    // A two-triangle mesh floor, off to the side.
+    btTriangleMesh tris;
+    tris.addTriangle(btVector3(10, 0, -2), btVector3(14, 0, -2), btVector3(10, 0, 2));
+    tris.addTriangle(btVector3(14, 0, -2), btVector3(14, 0, 2), btVector3(10, 0, 2));
+    btBvhTriangleMeshShape mesh(&tris, true);
+    std::vector<btRigidBody *> bodies;
+    auto add = [&](btCollisionShape *s, btScalar mass, const btVector3 &at) {
+        btVector3 inertia(0, 0, 0);
+        if (mass > 0) s->calculateLocalInertia(mass, inertia);
+        btRigidBody *b = new btRigidBody(mass, nullptr, s, inertia);
+        b->setWorldTransform(btTransform(btQuaternion::getIdentity(), at));
+        b->setActivationState(DISABLE_DEACTIVATION);
+        world.addRigidBody(b);
+        bodies.push_back(b);
+        return b;
+    };
+    add(&ground, 0, btVector3(0, 0, 0));
+    add(&mesh, 0, btVector3(0, btScalar(0.5), 0));
+    btRigidBody *flat = add(&box, 2, btVector3(0, btScalar(0.3), 0));
+    add(&ball, 1, btVector3(3, 2, 0));
+    add(&cap, 1, btVector3(-3, 1, 1));
+    btRigidBody *on_mesh = add(&ball, 1, btVector3(12, 2, 0));
+    for (int step = 0; step < 240; step++) world.stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_gt(config.stats.minko_algorithms.load(), 2);
+    ck_assert_int_eq(config.stats.collide_errors.load(), 0);
+    MK_ASSERT_NEAR(flat->getWorldTransform().getOrigin().y(), 0.25, 5e-3);
+    MK_ASSERT_NEAR(bodies[3]->getWorldTransform().getOrigin().y(), 0.3, 5e-3);
+    MK_ASSERT_NEAR(bodies[4]->getWorldTransform().getOrigin().y(), 0.2, 5e-3);
+    MK_ASSERT_NEAR(on_mesh->getWorldTransform().getOrigin().y(), 0.8, 2e-2);
+    // The flat box: find its manifold, check four points, their keys and the load they carry.
+    btPersistentManifold *m = nullptr;
+    for (int i = 0; i < dispatcher.getNumManifolds(); i++) {
+        btPersistentManifold *c = dispatcher.getManifoldByIndexInternal(i);
+        if (c->getBody0() == flat || c->getBody1() == flat) m = c;
+    }
+    ck_assert_ptr_nonnull(m);
+    ck_assert_int_eq(m->getNumContacts(), 4);
+    std::vector<std::pair<int, int> > keys;
+    double impulse = 0;
+    for (int i = 0; i < 4; i++) {
+        keys.push_back(std::make_pair(m->getContactPoint(i).m_partId0, m->getContactPoint(i).m_partId1));
+        impulse += m->getContactPoint(i).m_appliedImpulse;
+        ck_assert_int_gt(m->getContactPoint(i).getLifeTime(), 100);
+    }
+    MK_ASSERT_NEAR(impulse, 2 * 10.0 / 60, 0.05 * 2 * 10.0 / 60);
+    world.stepSimulation(btScalar(1) / 60, 0);
+    for (int i = 0; i < 4; i++) {
+        std::pair<int, int> k(m->getContactPoint(i).m_partId0, m->getContactPoint(i).m_partId1);
+        ck_assert(std::find(keys.begin(), keys.end(), k) != keys.end());
+    }
+    for (btRigidBody *b : bodies) {
+        world.removeRigidBody(b);
+        delete b;
+    }
+}
+END_TEST
+
+// A running world switches its narrowphase both ways; pairs get new
+// algorithms and the simulation goes on undisturbed.
+START_TEST(np_switch_at_run_time)
+{
+    mkb::CollisionConfiguration config(mkb::Backend::native);
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld world(&dispatcher, &bp, &solver, &config);
+    world.setGravity(btVector3(0, -10, 0));
+    btStaticPlaneShape ground(btVector3(0, 1, 0), 0);
+    btSphereShape ball(btScalar(0.3));
+    btRigidBody g(0, nullptr, &ground);
+    btVector3 inertia;
+    ball.calculateLocalInertia(1, inertia);
+    btRigidBody b(1, nullptr, &ball, inertia);
+    b.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 1, 0)));
+    b.setActivationState(DISABLE_DEACTIVATION);
+    world.addRigidBody(&g);
+    world.addRigidBody(&b);
+    for (int i = 0; i < 60; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), 0);
+    ck_assert(mkb::set_narrowphase(&world, mkb::Backend::minko));
+    for (int i = 0; i < 60; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), 1);
+    MK_ASSERT_NEAR(b.getWorldTransform().getOrigin().y(), 0.3, 5e-3);
+    ck_assert(mkb::set_narrowphase(&world, mkb::Backend::native));
+    for (int i = 0; i < 60; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), 1);
+    MK_ASSERT_NEAR(b.getWorldTransform().getOrigin().y(), 0.3, 5e-3);
+    // Not a Minko configuration: refused.
+    btDefaultCollisionConfiguration plain;
+    btCollisionDispatcher d2(&plain);
+    btCollisionWorld w2(&d2, &bp, &plain);
+    ck_assert(!mkb::set_narrowphase(&w2, mkb::Backend::minko));
+    world.removeRigidBody(&b);
+    world.removeRigidBody(&g);
+}
+END_TEST
+
 Suite *suite()
 {
     Suite *s = suite_create("minko_bullet");
@@ -747,6 +1028,12 @@ Suite *suite()
     tcase_add_test(b, bp_ray_and_sweep_hits_equal_native);
     tcase_add_test(b, bp_bad_input_and_reset);
     suite_add_tcase(s, b);
+    TCase *n = tcase_create("narrowphase");
+    tcase_set_timeout(n, 60);
+    tcase_add_test(n, np_conventions_match_bullet);
+    tcase_add_test(n, np_world_rests_on_minko_contacts);
+    tcase_add_test(n, np_switch_at_run_time);
+    suite_add_tcase(s, n);
     return s;
 }
 

@@ -1,0 +1,199 @@
+// narrowphase.cpp: Minko contact manifolds as Bullet collision algorithms
+// (see minko_bullet.h).
+#include <new>
+
+#include "contact_writer.h"
+#include "minko_bullet.h"
+
+namespace mkb {
+
+namespace {
+
+const int kMinkoTypes[] = {SPHERE_SHAPE_PROXYTYPE,   BOX_SHAPE_PROXYTYPE,         CAPSULE_SHAPE_PROXYTYPE,
+                           CYLINDER_SHAPE_PROXYTYPE, CONE_SHAPE_PROXYTYPE,        CONVEX_HULL_SHAPE_PROXYTYPE,
+                           STATIC_PLANE_PROXYTYPE};
+
+// One pair's algorithm: the two mapped shapes, Minko's per-pair cache (the
+// previous separating axis) and the manifold. Lives exactly as long as the
+// broadphase pair, in Bullet's algorithm pool.
+class Algorithm : public btActivatingCollisionAlgorithm {
+public:
+    Algorithm(const btCollisionAlgorithmConstructionInfo &ci, const btCollisionObjectWrapper *w0,
+              const btCollisionObjectWrapper *w1, CollisionConfiguration *config)
+        : btActivatingCollisionAlgorithm(ci, w0, w1),
+          m_manifold(ci.m_manifold),
+          m_own(false),
+          m_shape0(w0->getCollisionShape()),
+          m_config(config)
+    {
+        m_cache.kind = m_cache.index_a = m_cache.index_b = 0;
+    }
+    ~Algorithm() override
+    {
+        if (m_own && m_manifold) m_dispatcher->releaseManifold(m_manifold);
+    }
+
+    void processCollision(const btCollisionObjectWrapper *w0, const btCollisionObjectWrapper *w1,
+                          const btDispatcherInfo &, btManifoldResult *result) override
+    {
+        // Bullet hands the pair in its creation order; cope with the other one anyway.
+        const bool flip = w0->getCollisionShape() != m_shape0;
+        const btCollisionObjectWrapper *wa = flip ? w1 : w0, *wb = flip ? w0 : w1;
+        if (!m_manifold) {
+            m_manifold = m_dispatcher->getNewManifold(w0->getCollisionObject(), w1->getCollisionObject());
+            m_own = true;
+        }
+        result->setPersistentManifold(m_manifold);
+
+        // Shapes are mapped again every step (a few loads; hulls come from the
+        // cache), so a resized or rescaled primitive is seen at once, as by Bullet.
+        ShapeMap a, b;
+        mk_manifold mf;
+        mf.count = 0;
+        mk_status st = m_config->map_shape(wa->getCollisionShape(), &a);
+        if (st == MK_OK) st = m_config->map_shape(wb->getCollisionShape(), &b);
+        if (st == MK_OK)
+            st = mk_collide(&a.shape, minko_pose(wa->getWorldTransform(), a), &b.shape,
+                            minko_pose(wb->getWorldTransform(), b), m_manifold->getContactBreakingThreshold(), &m_cache,
+                            &mf);
+        if (st != MK_OK) {
+            m_config->stats.collide_errors++;
+            mf.count = 0;
+        }
+        // Minko: normal from A to B, depth > 0 penetrating, point_b on B.
+        // Bullet: normal on B pointing from B to A, signed distance < 0 penetrating.
+        PairContact pts[MK_MANIFOLD_MAX_POINTS];
+        const btVector3 n = to_bt(mf.normal);
+        for (int i = 0; i < mf.count; i++) {
+            const mk_contact_point &c = mf.points[i];
+            const bool ab = !flip;
+            pts[i].normal_on_b = ab ? -n : n;
+            pts[i].point_on_b = to_bt(ab ? c.point_b : c.point_a);
+            pts[i].distance = -c.depth;
+            pts[i].feature_a = ab ? MK_FEATURE_PAIR_A(c.features) : MK_FEATURE_PAIR_B(c.features);
+            pts[i].feature_b = ab ? MK_FEATURE_PAIR_B(c.features) : MK_FEATURE_PAIR_A(c.features);
+        }
+        write_contacts(result, pts, mf.count, m_own);
+        if (m_own) result->refreshContactPoints();
+    }
+
+    btScalar calculateTimeOfImpact(btCollisionObject *, btCollisionObject *, const btDispatcherInfo &,
+                                   btManifoldResult *) override
+    {
+        return 1;  // never called by btDiscreteDynamicsWorld (no DISPATCH_CONTINUOUS)
+    }
+
+    void getAllContactManifolds(btManifoldArray &manifolds) override
+    {
+        if (m_manifold && m_own) manifolds.push_back(m_manifold);
+    }
+
+private:
+    btPersistentManifold *m_manifold;
+    bool m_own;
+    const btCollisionShape *m_shape0;
+    CollisionConfiguration *m_config;
+    mk_manifold_cache m_cache;
+};
+
+btDefaultCollisionConstructionInfo with_room_for_minko(btDefaultCollisionConstructionInfo info)
+{
+    // Bullet's pool only asserts on block size: an algorithm larger than the
+    // pool's blocks silently overruns in a release build.
+    if (info.m_customCollisionAlgorithmMaxElementSize < (int)sizeof(Algorithm))
+        info.m_customCollisionAlgorithmMaxElementSize = (int)sizeof(Algorithm);
+    return info;
+}
+
+}  // namespace
+
+bool minko_shape_type(int type)
+{
+    for (int t : kMinkoTypes)
+        if (t == type) return true;
+    return false;
+}
+
+// Picks, per pair, Minko's algorithm or Bullet's own.
+struct CollisionConfiguration::CreateFunc : public btCollisionAlgorithmCreateFunc {
+    CollisionConfiguration *config;
+    explicit CreateFunc(CollisionConfiguration *c) : config(c) {}
+    btCollisionAlgorithm *CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo &ci,
+                                                   const btCollisionObjectWrapper *w0,
+                                                   const btCollisionObjectWrapper *w1) override
+    {
+        ShapeMap a, b;
+        if (config->map_shape(w0->getCollisionShape(), &a) == MK_OK &&
+            config->map_shape(w1->getCollisionShape(), &b) == MK_OK && minko_handles(a, b)) {
+            config->stats.minko_algorithms++;
+            void *mem = ci.m_dispatcher1->allocateCollisionAlgorithm(sizeof(Algorithm));
+            return new (mem) Algorithm(ci, w0, w1, config);
+        }
+        config->stats.native_fallbacks++;
+        btCollisionAlgorithmCreateFunc *native =
+            config->native_create_func(w0->getCollisionShape()->getShapeType(), w1->getCollisionShape()->getShapeType());
+        return native->CreateCollisionAlgorithm(ci, w0, w1);
+    }
+};
+
+CollisionConfiguration::CollisionConfiguration(Backend narrowphase, const btDefaultCollisionConstructionInfo &info)
+    : btDefaultCollisionConfiguration(with_room_for_minko(info)), m_backend(narrowphase)
+{
+    void *mem = btAlignedAlloc(sizeof(CreateFunc), 16);
+    m_create = new (mem) CreateFunc(this);
+}
+
+CollisionConfiguration::~CollisionConfiguration()
+{
+    m_create->~CreateFunc();
+    btAlignedFree(m_create);
+}
+
+btCollisionAlgorithmCreateFunc *CollisionConfiguration::getCollisionAlgorithmCreateFunc(int t0, int t1)
+{
+    if (m_backend == Backend::minko && minko_shape_type(t0) && minko_shape_type(t1) &&
+        !(t0 == STATIC_PLANE_PROXYTYPE && t1 == STATIC_PLANE_PROXYTYPE))
+        return m_create;
+    return native_create_func(t0, t1);
+}
+
+mk_status CollisionConfiguration::map_shape(const btCollisionShape *shape, ShapeMap *out)
+{
+    return map_primitive(shape, out);
+}
+
+// mk_collide answers every pair it supports, or MK_ERR_UNSUPPORTED for pairs
+// whose module this build lacks; ask it once, on touching unit poses.
+bool CollisionConfiguration::minko_handles(const ShapeMap &a, const ShapeMap &b)
+{
+    mk_manifold m;
+    const mk_transform id = mk_transform_identity();
+    return mk_collide(&a.shape, id, &b.shape, id, 0, nullptr, &m) == MK_OK;
+}
+
+bool set_narrowphase(btCollisionWorld *world, Backend b)
+{
+    btCollisionDispatcher *d = dynamic_cast<btCollisionDispatcher *>(world->getDispatcher());
+    if (!d) return false;
+    CollisionConfiguration *config = dynamic_cast<CollisionConfiguration *>(d->getCollisionConfiguration());
+    if (!config) return false;
+    config->set_backend(b);
+    for (int t0 : kMinkoTypes)
+        for (int t1 : kMinkoTypes) d->registerCollisionCreateFunc(t0, t1, config->getCollisionAlgorithmCreateFunc(t0, t1));
+    // Pairs keep the algorithm they were created with: drop them all.
+    struct Clean : btOverlapCallback {
+        btDispatcher *dispatcher;
+        btOverlappingPairCache *cache;
+        bool processOverlap(btBroadphasePair &pair) override
+        {
+            cache->cleanOverlappingPair(pair, dispatcher);
+            return false;
+        }
+    } clean;
+    clean.dispatcher = d;
+    clean.cache = world->getPairCache();
+    world->getPairCache()->processAllOverlappingPairs(&clean, d);
+    return true;
+}
+
+}  // namespace mkb

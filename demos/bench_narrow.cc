@@ -1,0 +1,835 @@
+// bench_narrow: the narrowphase benchmark of issue 2 §5.
+//
+// Every case family of tests/support/cases.h (seeded, with exact long double
+// references from the oracle) goes through every backend, one after another,
+// in one process run: ns per query (best of several timed loops over the
+// whole group, warm caches), relative error of distance / depth, normal error,
+// wrong booleans, failures. JSON Lines per ../shared/BENCH_FORMAT.md (suite
+// "narrow", --json FILE) and a table with the issue's verdicts.
+//
+// The double build (build/demos/bench_narrow) runs Minko double, libccd 2.1,
+// Bullet 3.24 double and ODE 0.16 (double). The float build
+// (build/single/demos/bench_narrow) runs Minko float and Bullet float: Bullet's
+// float and double libraries export the same C++ symbols, and Minko's two
+// builds the same C ones, so each precision gets its own process rather than a
+// dlopen(RTLD_DEEPBIND) shim: simpler, no symbol games, and every comparison
+// that matters (Minko against the competitors of its precision) stays inside
+// one process. The float run appends to the same JSON file (--append).
+//
+// Backend conventions (checked by --selftest on cases with known answers):
+// libccd and ODE answer only overlapping pairs (depth); for a separated pair
+// they give a boolean and no distance. Bullet's btGjkEpaSolver2::SignedDistance
+// works on the cores (no margins), so sphere and capsule radii (their Bullet
+// margins) are subtracted here; boxes, hulls and cylinders get margin 0, so
+// every backend sees the same geometry.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <btBulletCollisionCommon.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkPairDetector.h>
+#include <BulletCollision/NarrowPhaseCollision/btPointCollector.h>
+#include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
+
+extern "C" {
+#include "minko/distance.h"
+#include "minko/shape.h"
+#include "support/cases.h"
+#include "support/oracle.h"
+}
+
+#if !defined(MK_SINGLE)
+#include <ccd/ccd.h>
+#include <ode/ode.h>
+#endif
+
+namespace {
+
+// ---- per-case geometry in double, shared by the competitor backends --------
+
+struct Geo {
+    mk_shape_type type;
+    double radius;          // sphere / capsule radius (rounding)
+    double h[3];            // box half extents
+    double hh, disc;        // capsule / cylinder half height, cylinder radius
+    double R[3][3], p[3];   // pose: x -> R x + p
+    std::vector<double> v;  // hull vertices (xyz), from the oracle's hull
+    const mk_oracle_poly *poly;
+};
+
+Geo make_geo(const mk_shape &s, mk_transform x, const mk_oracle_shape *o)
+{
+    Geo g;
+    mk_oracle_pose P = mk_oracle_pose_of(x);
+    g.type = s.type;
+    g.radius = s.radius;
+    g.h[0] = g.h[1] = g.h[2] = 0;
+    g.hh = g.disc = 0;
+    g.poly = o ? &o->core : nullptr;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) g.R[i][j] = (double)P.r[i][j];
+    g.p[0] = (double)P.p.x, g.p[1] = (double)P.p.y, g.p[2] = (double)P.p.z;
+    switch (s.type) {
+    case MK_SHAPE_BOX: g.h[0] = s.u.half_extents.x, g.h[1] = s.u.half_extents.y, g.h[2] = s.u.half_extents.z; break;
+    case MK_SHAPE_CAPSULE: g.hh = s.u.capsule.half_height; break;
+    case MK_SHAPE_CYLINDER: g.hh = s.u.cylinder.half_height, g.disc = s.u.cylinder.radius; break;
+    case MK_SHAPE_HULL:
+        for (int i = 0; i < o->core.nv; ++i) {
+            g.v.push_back((double)o->core.v[i].x);
+            g.v.push_back((double)o->core.v[i].y);
+            g.v.push_back((double)o->core.v[i].z);
+        }
+        break;
+    default: break;
+    }
+    return g;
+}
+
+// ---- answers and metrics ------------------------------------------------------
+
+struct Answer {
+    double d;       // signed distance (valid if has_d)
+    double n[3];    // unit normal A->B (valid if has_n)
+    bool has_d, has_n, overlap, failed;
+};
+
+struct Backend {
+    std::string name;
+    bool depth_only;  // no distance for separated pairs (libccd, ODE, boolean-only)
+    bool bool_only;   // no depth either (ccdGJKIntersect)
+    bool closed_form_ref; // ODE: the yardstick of the closed-form families
+    virtual ~Backend() {}
+    // Builds per-case data for cases[0..n); false if the backend cannot take one of them.
+    virtual bool prepare(const std::vector<const mk_case *> &cases) = 0;
+    virtual void run(Answer *out) = 0;
+    virtual void release() = 0;
+};
+
+bool finite3(const double *v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+// ---- Minko ----------------------------------------------------------------------
+
+// mk_distance, cold (no warm-start cache: the competitors start cold too).
+struct Minko : Backend {
+    std::vector<mk_shape> a, b;
+    std::vector<mk_transform> xa, xb;
+    Minko() { name = mk_is_double_precision() ? "minko" : "minko_f32", depth_only = bool_only = closed_form_ref = false; }
+    bool prepare(const std::vector<const mk_case *> &cases) override
+    {
+        for (const mk_case *c : cases) a.push_back(c->a), b.push_back(c->b), xa.push_back(c->xa), xb.push_back(c->xb);
+        return true;
+    }
+    void run(Answer *out) override
+    {
+        for (size_t i = 0; i < a.size(); ++i) {
+            mk_distance_result r;
+            mk_status st = mk_distance(&a[i], xa[i], &b[i], xb[i], nullptr, &r);
+            Answer &o = out[i];
+            o.has_d = o.has_n = st == MK_OK;
+            o.d = r.distance;
+            o.n[0] = r.normal.x, o.n[1] = r.normal.y, o.n[2] = r.normal.z;
+            o.overlap = st == MK_OK && r.distance <= 0;
+            o.failed = st != MK_OK || !std::isfinite(o.d) || !finite3(o.n);
+        }
+    }
+    void release() override { a.clear(), b.clear(), xa.clear(), xb.clear(); }
+};
+
+// mk_overlap: the boolean query alone (touching counts as overlapping).
+struct MinkoOverlap : Minko {
+    MinkoOverlap() { name += ".overlap", bool_only = true; }
+    void run(Answer *out) override
+    {
+        for (size_t i = 0; i < a.size(); ++i) {
+            int hit = 0;
+            mk_status st = mk_overlap(&a[i], xa[i], &b[i], xb[i], nullptr, &hit);
+            out[i].has_d = out[i].has_n = false;
+            out[i].overlap = hit != 0;
+            out[i].failed = st != MK_OK;
+        }
+    }
+};
+
+// ---- Bullet (double or float, whichever this build links) -------------------------
+
+#if defined(BT_USE_DOUBLE_PRECISION)
+#define BULLET_TAG "bullet_f64"
+#else
+#define BULLET_TAG "bullet_f32"
+#endif
+
+btCollisionShape *bullet_shape(const Geo &g, double *margin)
+{
+    btConvexInternalShape *s = nullptr;
+    *margin = 0;
+    switch (g.type) {
+    case MK_SHAPE_SPHERE: *margin = g.radius; return new btSphereShape((btScalar)g.radius);
+    case MK_SHAPE_CAPSULE: *margin = g.radius; return new btCapsuleShapeZ((btScalar)g.radius, (btScalar)(2 * g.hh));
+    case MK_SHAPE_BOX: s = new btBoxShape(btVector3((btScalar)g.h[0], (btScalar)g.h[1], (btScalar)g.h[2])); break;
+    case MK_SHAPE_CYLINDER: s = new btCylinderShapeZ(btVector3((btScalar)g.disc, (btScalar)g.disc, (btScalar)g.hh)); break;
+    case MK_SHAPE_HULL: {
+        btConvexHullShape *h = new btConvexHullShape();
+        for (size_t i = 0; i < g.v.size(); i += 3)
+            h->addPoint(btVector3((btScalar)g.v[i], (btScalar)g.v[i + 1], (btScalar)g.v[i + 2]), false);
+        h->recalcLocalAabb();
+        s = h;
+        break;
+    }
+    default: return nullptr;
+    }
+    s->setMargin(0); // boxes and cylinders keep their outer size (setMargin moves the core), hulls use their points
+    return s;
+}
+
+btTransform bullet_xf(const Geo &g)
+{
+    btMatrix3x3 m((btScalar)g.R[0][0], (btScalar)g.R[0][1], (btScalar)g.R[0][2], (btScalar)g.R[1][0], (btScalar)g.R[1][1],
+                  (btScalar)g.R[1][2], (btScalar)g.R[2][0], (btScalar)g.R[2][1], (btScalar)g.R[2][2]);
+    return btTransform(m, btVector3((btScalar)g.p[0], (btScalar)g.p[1], (btScalar)g.p[2]));
+}
+
+struct BulletBase : Backend {
+    std::vector<std::unique_ptr<btCollisionShape>> sa, sb;
+    std::vector<btTransform> ta, tb;
+    std::vector<double> margin; // sum of the two intrinsic margins (sphere / capsule radii)
+    bool prepare(const std::vector<const mk_case *> &cases) override
+    {
+        for (const mk_case *c : cases) {
+            Geo ga = make_geo(c->a, c->xa, c->oa), gb = make_geo(c->b, c->xb, c->ob);
+            double ma, mb;
+            btCollisionShape *a = bullet_shape(ga, &ma), *b = bullet_shape(gb, &mb);
+            sa.emplace_back(a);
+            sb.emplace_back(b);
+            if (!a || !b) return false;
+            ta.push_back(bullet_xf(ga));
+            tb.push_back(bullet_xf(gb));
+            margin.push_back(ma + mb);
+        }
+        return true;
+    }
+    void release() override
+    {
+        sa.clear(), sb.clear(), ta.clear(), tb.clear(), margin.clear();
+    }
+};
+
+// btGjkPairDetector + btGjkEpaPenetrationDepthSolver, as btConvexConvexAlgorithm
+// uses them: one detector per query, solvers reused.
+struct BulletPair : BulletBase {
+    BulletPair() { name = BULLET_TAG ".gjk_pair", depth_only = bool_only = closed_form_ref = false; }
+    void run(Answer *out) override
+    {
+        btVoronoiSimplexSolver simplex;
+        btGjkEpaPenetrationDepthSolver epa;
+        for (size_t i = 0; i < ta.size(); ++i) {
+            btGjkPairDetector det(static_cast<btConvexShape *>(sa[i].get()), static_cast<btConvexShape *>(sb[i].get()),
+                                  &simplex, &epa);
+            btGjkPairDetector::ClosestPointInput in;
+            btPointCollector res;
+            in.m_transformA = ta[i];
+            in.m_transformB = tb[i];
+            det.getClosestPoints(in, res, nullptr);
+            Answer &a = out[i];
+            a.has_d = a.has_n = res.m_hasResult;
+            a.d = res.m_distance;
+            // normalOnBInWorld points from B towards A
+            a.n[0] = -res.m_normalOnBInWorld.x(), a.n[1] = -res.m_normalOnBInWorld.y(), a.n[2] = -res.m_normalOnBInWorld.z();
+            a.overlap = res.m_hasResult && a.d <= 0;
+            a.failed = !res.m_hasResult || !std::isfinite(a.d) || !finite3(a.n);
+        }
+    }
+};
+
+// btGjkEpaSolver2::SignedDistance: GJK on the cores, EPA if they overlap.
+struct BulletEpa2 : BulletBase {
+    BulletEpa2() { name = BULLET_TAG ".gjk_epa2", depth_only = bool_only = closed_form_ref = false; }
+    void run(Answer *out) override
+    {
+        for (size_t i = 0; i < ta.size(); ++i) {
+            btGjkEpaSolver2::sResults r;
+            btVector3 guess = tb[i].getOrigin() - ta[i].getOrigin();
+            bool ok = btGjkEpaSolver2::SignedDistance(static_cast<btConvexShape *>(sa[i].get()), ta[i],
+                                                      static_cast<btConvexShape *>(sb[i].get()), tb[i], guess, r);
+            Answer &a = out[i];
+            // The normal is reported in A's local frame, from B towards A; the
+            // witnesses are in world: take the world direction from A's basis.
+            btVector3 n = -(ta[i].getBasis() * r.normal);
+            a.has_d = a.has_n = ok;
+            a.d = r.distance - margin[i];
+            a.n[0] = n.x(), a.n[1] = n.y(), a.n[2] = n.z();
+            a.overlap = ok && a.d <= 0;
+            a.failed = !ok || !std::isfinite(a.d) || !finite3(a.n);
+        }
+    }
+};
+
+#if !defined(MK_SINGLE)
+
+// ---- libccd 2.1 ------------------------------------------------------------------------
+
+// The support function a libccd user writes: rotate the direction into the
+// shape's frame, take the local support (a linear scan for hulls, as FCL's
+// wrapper does), move it back.
+void ccd_support(const void *obj, const ccd_vec3_t *dir, ccd_vec3_t *vec)
+{
+    const Geo &g = *static_cast<const Geo *>(obj);
+    double d[3], s[3] = {0, 0, 0}, l;
+    for (int i = 0; i < 3; ++i) d[i] = g.R[0][i] * dir->v[0] + g.R[1][i] * dir->v[1] + g.R[2][i] * dir->v[2];
+    l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    switch (g.type) {
+    case MK_SHAPE_BOX:
+        for (int i = 0; i < 3; ++i) s[i] = d[i] >= 0 ? g.h[i] : -g.h[i];
+        break;
+    case MK_SHAPE_CAPSULE: s[2] = d[2] >= 0 ? g.hh : -g.hh; break;
+    case MK_SHAPE_CYLINDER: {
+        double r = std::sqrt(d[0] * d[0] + d[1] * d[1]);
+        if (r > 0) s[0] = g.disc * d[0] / r, s[1] = g.disc * d[1] / r;
+        s[2] = d[2] >= 0 ? g.hh : -g.hh;
+        break;
+    }
+    case MK_SHAPE_HULL: {
+        size_t best = 0;
+        double bd = -HUGE_VAL;
+        for (size_t i = 0; i < g.v.size(); i += 3) {
+            double t = d[0] * g.v[i] + d[1] * g.v[i + 1] + d[2] * g.v[i + 2];
+            if (t > bd) bd = t, best = i;
+        }
+        s[0] = g.v[best], s[1] = g.v[best + 1], s[2] = g.v[best + 2];
+        break;
+    }
+    default: break;
+    }
+    if (g.radius > 0 && l > 0)
+        for (int i = 0; i < 3; ++i) s[i] += g.radius * d[i] / l;
+    for (int i = 0; i < 3; ++i) vec->v[i] = g.R[i][0] * s[0] + g.R[i][1] * s[1] + g.R[i][2] * s[2] + g.p[i];
+}
+
+void ccd_center(const void *obj, ccd_vec3_t *c)
+{
+    const Geo &g = *static_cast<const Geo *>(obj);
+    for (int i = 0; i < 3; ++i) c->v[i] = g.p[i];
+}
+
+enum CcdMode { CCD_GJK_EPA, CCD_MPR, CCD_GJK_BOOL };
+
+struct Ccd : Backend {
+    CcdMode mode;
+    ccd_t ccd;
+    std::vector<Geo> ga, gb;
+    // tol <= 0: libccd's defaults (EPA and MPR 1e-4, GJK 1e-6).
+    Ccd(CcdMode m, double tol) : mode(m)
+    {
+        static const char *const names[] = {"libccd.gjk_epa", "libccd.mpr", "libccd.gjk_intersect"};
+        name = names[m];
+        if (tol > 0) name += "_tight";
+        depth_only = true;
+        bool_only = m == CCD_GJK_BOOL;
+        closed_form_ref = false;
+        CCD_INIT(&ccd);
+        ccd.support1 = ccd.support2 = ccd_support;
+        ccd.center1 = ccd.center2 = ccd_center;
+        // libccd's default is unbounded; a cap keeps a stuck case from hanging the run.
+        ccd.max_iterations = 1000;
+        if (tol > 0) ccd.epa_tolerance = ccd.mpr_tolerance = ccd.dist_tolerance = tol;
+    }
+    bool prepare(const std::vector<const mk_case *> &cases) override
+    {
+        for (const mk_case *c : cases) {
+            ga.push_back(make_geo(c->a, c->xa, c->oa));
+            gb.push_back(make_geo(c->b, c->xb, c->ob));
+        }
+        return true;
+    }
+    void run(Answer *out) override
+    {
+        for (size_t i = 0; i < ga.size(); ++i) {
+            Answer &a = out[i];
+            ccd_real_t depth = 0;
+            ccd_vec3_t dir, pos;
+            int r;
+            dir.v[0] = dir.v[1] = dir.v[2] = 0;
+            if (mode == CCD_GJK_BOOL) r = ccdGJKIntersect(&ga[i], &gb[i], &ccd) ? 0 : -1;
+            else if (mode == CCD_MPR) r = ccdMPRPenetration(&ga[i], &gb[i], &ccd, &depth, &dir, &pos);
+            else r = ccdGJKPenetration(&ga[i], &gb[i], &ccd, &depth, &dir, &pos);
+            a.overlap = r == 0;
+            a.has_d = a.has_n = r == 0 && mode != CCD_GJK_BOOL;
+            a.d = -depth;
+            // dir: the direction B must move to separate, i.e. A->B
+            for (int k = 0; k < 3; ++k) a.n[k] = dir.v[k];
+            a.failed = a.has_d && (!std::isfinite(a.d) || !finite3(a.n));
+        }
+    }
+    void release() override { ga.clear(), gb.clear(); }
+};
+
+// ---- ODE 0.16 ----------------------------------------------------------------------------
+
+struct OdeGeom {
+    dGeomID g;
+    std::vector<dReal> planes, points;
+    std::vector<unsigned> polys;
+};
+
+bool ode_geom(const Geo &s, OdeGeom &o)
+{
+    switch (s.type) {
+    case MK_SHAPE_SPHERE: o.g = dCreateSphere(0, s.radius); break;
+    case MK_SHAPE_BOX: o.g = dCreateBox(0, 2 * s.h[0], 2 * s.h[1], 2 * s.h[2]); break;
+    case MK_SHAPE_CAPSULE: o.g = dCreateCapsule(0, s.radius, 2 * s.hh); break;
+    case MK_SHAPE_CYLINDER: o.g = dCreateCylinder(0, s.disc, 2 * s.hh); break;
+    case MK_SHAPE_HULL: {
+        // ODE needs planes and polygons: the oracle's hull provides them.
+        const mk_oracle_poly *P = s.poly;
+        for (int i = 0; i < P->nv; ++i)
+            o.points.push_back((dReal)P->v[i].x), o.points.push_back((dReal)P->v[i].y), o.points.push_back((dReal)P->v[i].z);
+        for (int f = 0; f < P->nf; ++f) {
+            const mk_lvec3 n = P->fn[f], v0 = P->v[P->face_vert[P->face_first[f]]];
+            o.planes.push_back((dReal)n.x), o.planes.push_back((dReal)n.y), o.planes.push_back((dReal)n.z);
+            o.planes.push_back((dReal)(n.x * v0.x + n.y * v0.y + n.z * v0.z));
+            o.polys.push_back((unsigned)(P->face_first[f + 1] - P->face_first[f]));
+            for (int k = P->face_first[f]; k < P->face_first[f + 1]; ++k) o.polys.push_back((unsigned)P->face_vert[k]);
+        }
+        o.g = dCreateConvex(0, o.planes.data(), (unsigned)P->nf, o.points.data(), (unsigned)P->nv, o.polys.data());
+        break;
+    }
+    default: return false;
+    }
+    dMatrix3 R;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) R[i * 4 + j] = s.R[i][j];
+        R[i * 4 + 3] = 0;
+    }
+    dGeomSetPosition(o.g, s.p[0], s.p[1], s.p[2]);
+    dGeomSetRotation(o.g, R);
+    return true;
+}
+
+struct Ode : Backend {
+    std::vector<std::unique_ptr<OdeGeom>> ga, gb;
+    Ode() { name = "ode.dCollide", depth_only = true, bool_only = false, closed_form_ref = true; }
+    bool prepare(const std::vector<const mk_case *> &cases) override
+    {
+        for (const mk_case *c : cases) {
+            ga.emplace_back(new OdeGeom());
+            gb.emplace_back(new OdeGeom());
+            if (!ode_geom(make_geo(c->a, c->xa, c->oa), *ga.back()) || !ode_geom(make_geo(c->b, c->xb, c->ob), *gb.back()))
+                return false;
+        }
+        return true;
+    }
+    void run(Answer *out) override
+    {
+        dContactGeom contacts[16];
+        for (size_t i = 0; i < ga.size(); ++i) {
+            int n = dCollide(ga[i]->g, gb[i]->g, 16, contacts, sizeof contacts[0]);
+            Answer &a = out[i];
+            int deepest = 0;
+            for (int k = 1; k < n; ++k)
+                if (contacts[k].depth > contacts[deepest].depth) deepest = k;
+            a.overlap = n > 0;
+            a.has_d = a.has_n = n > 0;
+            a.d = n > 0 ? -contacts[deepest].depth : 0;
+            // ODE's normal points into o1 (moving o1 along it separates): B->A
+            for (int k = 0; k < 3; ++k) a.n[k] = n > 0 ? -contacts[deepest].normal[k] : 0;
+            a.failed = n < 0 || (n > 0 && (!std::isfinite(a.d) || !finite3(a.n)));
+        }
+    }
+    void release() override
+    {
+        for (auto &g : ga)
+            if (g->g) dGeomDestroy(g->g);
+        for (auto &g : gb)
+            if (g->g) dGeomDestroy(g->g);
+        ga.clear(), gb.clear();
+    }
+};
+
+#endif // !MK_SINGLE
+
+// ---- statistics -----------------------------------------------------------------------------
+
+double quantile(std::vector<double> v, double q)
+{
+    if (v.empty()) return NAN;
+    std::sort(v.begin(), v.end());
+    size_t k = (size_t)std::ceil(q * (double)v.size());
+    return v[k == 0 ? 0 : std::min(k, v.size()) - 1];
+}
+
+struct Row {
+    std::string family, variant, backend;
+    size_t n;
+    double ns;
+    bool has_err, has_nrm;
+    double rel_p50, rel_p99, rel_max, abs_size_p99, abs_size_max, nrm_p99, nrm_max;
+    double ref_over_size;  // largest |reference| / size in the group
+    int wrong_bool, failures;
+};
+
+// |ref| at or below this fraction of the size counts as touching: no boolean is wrong there.
+const double TOUCH = 1e-14;
+
+Row measure(const Backend &b, const std::vector<const mk_case *> &cs, const std::vector<Answer> &ans, double ns)
+{
+    Row r;
+    std::vector<double> rel, absz, nrm;
+    r.family = cs[0]->family, r.variant = cs[0]->variant, r.backend = b.name;
+    r.n = cs.size(), r.ns = ns, r.wrong_bool = r.failures = 0, r.ref_over_size = 0;
+    for (size_t i = 0; i < cs.size(); ++i) {
+        const mk_case &c = *cs[i];
+        const Answer &a = ans[i];
+        r.ref_over_size = std::max(r.ref_over_size, std::fabs(c.distance) / c.size);
+        bool touching = std::fabs(c.distance) <= TOUCH * c.size;
+        if (a.failed) {
+            ++r.failures;
+            continue;
+        }
+        if (!touching && a.overlap != (c.distance <= 0)) ++r.wrong_bool;
+        if (b.bool_only) continue;
+        double d;
+        if (a.has_d) d = a.d;
+        else if (c.distance <= 0) d = 0; // a depth-only backend that saw no contact implies depth 0
+        else continue;                   // separated and no distance asked of it
+        double err = std::fabs(d - c.distance);
+        rel.push_back(touching ? err / c.size : err / std::fabs(c.distance));
+        absz.push_back(err / c.size);
+        if (a.has_n && c.normal_defined) {
+            mk_lvec3 ref = {c.normal[0], c.normal[1], c.normal[2]};
+            nrm.push_back((double)mk_oracle_angle_deg(ref, a.n[0], a.n[1], a.n[2]));
+        }
+    }
+    r.has_err = !rel.empty(), r.has_nrm = !nrm.empty();
+    r.rel_p50 = quantile(rel, 0.5), r.rel_p99 = quantile(rel, 0.99), r.rel_max = quantile(rel, 1);
+    r.abs_size_p99 = quantile(absz, 0.99), r.abs_size_max = quantile(absz, 1);
+    r.nrm_p99 = quantile(nrm, 0.99), r.nrm_max = quantile(nrm, 1);
+    return r;
+}
+
+// ---- verdicts -----------------------------------------------------------------------------------
+
+// The row the verdicts judge: mk_distance (not the boolean-only mk_overlap row).
+bool is_minko(const Row &r) { return r.backend == "minko" || r.backend == "minko_f32"; }
+
+// Issue 2 targets, for the Minko row of a group. Where |d| is tiny against
+// the size (the nearly-touching family, and regression cases within 1e-5 x
+// size of contact: touching, kissing, +-1e-9, Jolt #2103) a relative error
+// means nothing (1e-9 cannot be placed better than one ulp of the
+// coordinates), so the issue's absolute rule applies: error <= 1e-13 x size.
+bool absolute_rule(const Row &m)
+{
+    return m.family == "nearly_touching" || (m.family == "regression" && m.ref_over_size <= 1e-5);
+}
+
+std::string accuracy_verdict(const Row &m, bool single)
+{
+    char buf[256];
+    std::string miss;
+    auto add = [&](const char *what, double got, double lim) {
+        if (!(got <= lim)) {
+            std::snprintf(buf, sizeof buf, "%s%s %.2g > %.0e (x%.3g)", miss.empty() ? "" : "; ", what, got, lim, got / lim);
+            miss += buf;
+        }
+    };
+    if (single) {
+        bool applies = m.family != "tiny" && m.family != "thin_rods" && m.family != "nearly_touching" && m.family != "regression";
+        if (!applies) return "float: no target on this family";
+        if (m.has_err) add("rel p99", m.rel_p99, 1e-4);
+    } else {
+        if (absolute_rule(m)) add("abs err/size max", m.abs_size_max, 1e-13);
+        else if (m.has_err) add("rel p99", m.rel_p99, 1e-10), add("rel max", m.rel_max, 1e-8);
+        if (m.has_nrm) add("normal p99 deg", m.nrm_p99, 1e-6);
+        if (m.wrong_bool) add("wrong bool", m.wrong_bool, 0);
+    }
+    if (m.failures) add("failures", m.failures, 0);
+    return miss.empty() ? "accuracy met" : "accuracy MISSED: " + miss;
+}
+
+bool accurate(const Row &r)
+{
+    return r.has_err && r.rel_p99 <= 1e-6 && r.failures == 0 && r.wrong_bool <= 0.005 * (double)r.n;
+}
+
+std::string speed_verdict(const Row &m, const std::vector<Row> &rows, bool closed_form)
+{
+    char buf[256];
+    const Row *ref = nullptr;
+    if (m.family == "regression") return "";
+    for (const Row &r : rows) {
+        if (is_minko(r)) continue;
+        if (closed_form ? r.backend == "ode.dCollide" : accurate(r))
+            if (!ref || r.ns < ref->ns) ref = &r;
+    }
+    if (!ref)
+        return closed_form ? "speed: no ODE row" : "speed: no competitor with p99 <= 1e-6, 0 failures, <= 0.5% wrong booleans";
+    double ratio = m.ns / ref->ns, target = closed_form ? 1.0 : 1.0 / 3;
+    std::snprintf(buf, sizeof buf, "speed %s: %.0f ns vs %s %.0f ns = x%.2f (target <= x%.2f%s)",
+                  ratio <= target ? "met" : "MISSED", m.ns, ref->backend.c_str(), ref->ns, ratio, target,
+                  ratio <= target ? "" : (", missed by x" + std::to_string(ratio / target).substr(0, 4)).c_str());
+    return buf;
+}
+
+// ---- output ---------------------------------------------------------------------------------------
+
+void json_num(FILE *f, const char *key, double v)
+{
+    if (std::isfinite(v)) std::fprintf(f, ",\"%s\":%.6g", key, v);
+}
+
+void write_json(FILE *f, const Row &r, const std::string &acc, const std::string &speed)
+{
+    std::fprintf(f, "{\"suite\":\"narrow\",\"case\":\"%s\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":%zu", r.family.c_str(),
+                 r.variant.c_str(), r.backend.c_str(), r.n);
+    json_num(f, "ns_per_query", r.ns);
+    if (r.has_err) {
+        json_num(f, "rel_err_p50", r.rel_p50);
+        json_num(f, "rel_err_p99", r.rel_p99);
+        json_num(f, "rel_err_max", r.rel_max);
+        json_num(f, "abs_err_over_size_p99", r.abs_size_p99);
+        json_num(f, "abs_err_over_size_max", r.abs_size_max);
+    }
+    if (r.has_nrm) {
+        json_num(f, "normal_err_deg_p99", r.nrm_p99);
+        json_num(f, "normal_err_deg_max", r.nrm_max);
+    }
+    std::fprintf(f, ",\"wrong_bool\":%d,\"failures\":%d", r.wrong_bool, r.failures);
+    if (!acc.empty()) std::fprintf(f, ",\"verdict_accuracy\":\"%s\"", acc.c_str());
+    if (!speed.empty()) std::fprintf(f, ",\"verdict_speed\":\"%s\"", speed.c_str());
+    std::fprintf(f, "}\n");
+}
+
+std::string fmt(bool have, double v)
+{
+    char buf[32];
+    if (!have || !std::isfinite(v)) return "-";
+    std::snprintf(buf, sizeof buf, "%.1e", v);
+    return buf;
+}
+
+void print_row(const Row &r)
+{
+    std::printf("  %-26s %-28s %5zu %10.0f %8s %8s %8s %8s %5d %5d\n", (r.family + "/" + r.variant).substr(0, 26).c_str(),
+                r.backend.c_str(), r.n, r.ns, fmt(r.has_err, r.rel_p50).c_str(), fmt(r.has_err, r.rel_p99).c_str(),
+                fmt(r.has_err, r.rel_max).c_str(), fmt(r.has_nrm, r.nrm_p99).c_str(), r.wrong_bool, r.failures);
+}
+
+bool family_closed_form(const std::string &name)
+{
+    for (int f = 0; f < MK_FAM_COUNT; ++f)
+        if (name == mk_family_name((mk_family)f)) return mk_family_closed_form((mk_family)f) != 0;
+    return false;
+}
+
+// Rows of one group, then the verdicts of issue 2 on its Minko row (if any).
+void report_group(const std::vector<Row> &rows, bool single, FILE *json)
+{
+    std::string acc, speed;
+    for (const Row &r : rows) {
+        std::string a, s;
+        print_row(r);
+        if (is_minko(r)) {
+            a = acc = accuracy_verdict(r, single);
+            if (!single) s = speed = speed_verdict(r, rows, family_closed_form(r.family));
+        }
+        if (json) write_json(json, r, a, s);
+    }
+    if (!acc.empty()) std::printf("    -> %s%s%s\n", acc.c_str(), speed.empty() ? "" : " | ", speed.c_str());
+}
+
+// ---- driver ------------------------------------------------------------------------------------------
+
+struct Options {
+    bool quick = false, append = false, selftest = false, list = false;
+    const char *json = nullptr;
+    std::vector<std::string> families, backends;
+    int reps = 0, n = 0;
+};
+
+double now_ns()
+{
+    return (double)std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
+std::vector<std::unique_ptr<Backend>> make_backends(const Options &o)
+{
+    std::vector<std::unique_ptr<Backend>> all, keep;
+    all.emplace_back(new Minko());
+    all.emplace_back(new MinkoOverlap());
+#if !defined(MK_SINGLE)
+    all.emplace_back(new Ccd(CCD_GJK_EPA, 0));
+    all.emplace_back(new Ccd(CCD_GJK_EPA, 1e-12));
+    all.emplace_back(new Ccd(CCD_MPR, 0));
+    all.emplace_back(new Ccd(CCD_MPR, 1e-12));
+    all.emplace_back(new Ccd(CCD_GJK_BOOL, 0));
+#endif
+    all.emplace_back(new BulletPair());
+    all.emplace_back(new BulletEpa2());
+#if !defined(MK_SINGLE)
+    all.emplace_back(new Ode());
+#endif
+    for (auto &b : all)
+        if (o.backends.empty() || std::find(o.backends.begin(), o.backends.end(), b->name) != o.backends.end())
+            keep.push_back(std::move(b));
+    return keep;
+}
+
+bool wanted_family(const Options &o, const char *name)
+{
+    return o.families.empty() || std::find(o.families.begin(), o.families.end(), name) != o.families.end();
+}
+
+int build_cases(const Options &o, mk_case_set *set)
+{
+    int n = o.n > 0 ? o.n : o.quick ? 10 : 200;
+    for (int f = 0; f < MK_FAM_COUNT; ++f)
+        if (wanted_family(o, mk_family_name((mk_family)f)) &&
+            mk_cases_add_family(set, (mk_family)f, n, n, 1 + (uint64_t)f) != 0)
+            return -1;
+    if (wanted_family(o, "regression") && mk_cases_add_regressions(set)) return -1;
+    return 0;
+}
+
+// Each backend's sign conventions on two known answers: unit cubes 1 apart
+// along +x (distance 1, normal +x; depth-only backends must say "separated"),
+// and libccd #17's small box 1 cm deep on a big one (normal +z).
+int selftest(std::vector<std::unique_ptr<Backend>> &backends)
+{
+    mk_case_set set;
+    mk_case gap;
+    int bad = 0;
+    std::memset(&set, 0, sizeof set);
+    std::memset(&gap, 0, sizeof gap);
+    if (mk_cases_add_regressions(&set)) return 1;
+    gap.family = "selftest", gap.variant = "cubes_gap_x";
+    mk_shape_box(mk_v3(0.5, 0.5, 0.5), 0, &gap.a);
+    gap.b = gap.a;
+    gap.xa = mk_transform_identity();
+    gap.xb = mk_transform_make(mk_v3(2, 0, 0), mk_quat_identity());
+    gap.distance = 1, gap.normal[0] = 1, gap.normal_defined = 1, gap.size = 0.8660254037844386;
+    std::vector<const mk_case *> cs(1, &gap);
+    for (int i = 0; i < set.count; ++i)
+        if (!std::strcmp(set.cases[i].variant, "libccd17_5m_vs_0.2m")) cs.push_back(&set.cases[i]);
+    for (auto &b : backends) {
+        std::vector<Answer> ans(cs.size());
+        if (!b->prepare(cs)) continue;
+        b->run(ans.data());
+        for (size_t i = 0; i < cs.size(); ++i) {
+            const Answer &a = ans[i];
+            const mk_case &c = *cs[i];
+            int axis = i == 0 ? 0 : 2;
+            bool want_overlap = c.distance <= 0, want_d = !b->bool_only && (want_overlap || !b->depth_only);
+            bool ok = a.overlap == want_overlap && !a.failed &&
+                      (!want_d || (a.has_d && std::fabs(a.d - c.distance) < 1e-6 && a.n[axis] > 0.99));
+            std::printf("%-28s %-22s d %+.6f (ref %+.6f) n (%+.3f %+.3f %+.3f) %s\n", b->name.c_str(), c.variant,
+                        a.has_d ? a.d : NAN, c.distance, a.n[0], a.n[1], a.n[2], ok ? "ok" : "WRONG");
+            bad += !ok;
+        }
+        b->release();
+    }
+    mk_case_set_free(&set);
+    return bad != 0;
+}
+
+void usage(const char *argv0)
+{
+    std::fprintf(stderr,
+                 "usage: %s [--quick] [--json FILE [--append]] [--family NAME]... [--backend NAME]... [--n N] [--reps N]\n"
+                 "          [--list] [--selftest]\n",
+                 argv0);
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        std::string a = argv[i];
+        if (a == "--quick") o.quick = true;
+        else if (a == "--append") o.append = true;
+        else if (a == "--selftest") o.selftest = true;
+        else if (a == "--list") o.list = true;
+        else if (a == "--json" && i + 1 < argc) o.json = argv[++i];
+        else if (a == "--family" && i + 1 < argc) o.families.push_back(argv[++i]);
+        else if (a == "--backend" && i + 1 < argc) o.backends.push_back(argv[++i]);
+        else if (a == "--n" && i + 1 < argc) o.n = std::atoi(argv[++i]);
+        else if (a == "--reps" && i + 1 < argc) o.reps = std::atoi(argv[++i]);
+        else {
+            usage(argv[0]);
+            return 2;
+        }
+    }
+#if !defined(MK_SINGLE)
+    dInitODE2(0);
+#endif
+    std::vector<std::unique_ptr<Backend>> backends = make_backends(o);
+    if (o.list) {
+        for (int f = 0; f < MK_FAM_COUNT; ++f) std::printf("family  %s\n", mk_family_name((mk_family)f));
+        std::printf("family  regression\n");
+        for (auto &b : backends) std::printf("backend %s\n", b->name.c_str());
+        return 0;
+    }
+    if (o.selftest) return selftest(backends);
+
+    const bool single = mk_is_double_precision() == 0;
+    const int reps = o.reps > 0 ? o.reps : o.quick ? 3 : 10;
+    mk_case_set set;
+    std::memset(&set, 0, sizeof set);
+    double t0 = now_ns();
+    if (build_cases(o, &set)) {
+        std::fprintf(stderr, "bench_narrow: case generation failed\n");
+        return 1;
+    }
+    std::printf("bench_narrow (%s build): %d cases with exact references in %.1f s; best of %d loops per group\n",
+                single ? "float" : "double", set.count, (now_ns() - t0) * 1e-9, reps);
+    FILE *json = nullptr;
+    if (o.json && !(json = std::fopen(o.json, o.append ? "a" : "w"))) {
+        std::perror(o.json);
+        return 1;
+    }
+    std::printf("\n  %-26s %-28s %5s %10s %8s %8s %8s %8s %5s %5s\n", "family/variant", "backend", "n", "ns/query", "rel p50",
+                "rel p99", "rel max", "nrm p99", "wrong", "fail");
+    for (int lo = 0; lo < set.count;) {
+        int hi = lo;
+        while (hi < set.count && !std::strcmp(set.cases[hi].family, set.cases[lo].family) &&
+               !std::strcmp(set.cases[hi].variant, set.cases[lo].variant))
+            ++hi;
+        std::vector<const mk_case *> cs;
+        for (int i = lo; i < hi; ++i) cs.push_back(&set.cases[i]);
+        std::vector<Row> rows;
+        for (auto &b : backends) {
+            std::vector<Answer> ans(cs.size());
+            if (!b->prepare(cs)) {
+                b->release();
+                continue;
+            }
+            b->run(ans.data()); // warm-up, and the answers judged below
+            // Small groups (the regression cases) loop over themselves so a timed loop is >= 1000 queries.
+            int inner = (int)((1000 + cs.size() - 1) / cs.size());
+            double best = HUGE_VAL;
+            for (int r = 0; r < reps; ++r) {
+                double t = now_ns();
+                for (int k = 0; k < inner; ++k) b->run(ans.data());
+                best = std::min(best, now_ns() - t);
+            }
+            b->release();
+            rows.push_back(measure(*b, cs, ans, best / ((double)cs.size() * inner)));
+        }
+        report_group(rows, single, json);
+        lo = hi;
+    }
+    if (json) std::fclose(json);
+    mk_case_set_free(&set);
+#if !defined(MK_SINGLE)
+    dCloseODE();
+#endif
+    return 0;
+}
