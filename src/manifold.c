@@ -24,20 +24,21 @@ static mk_status sphere_sphere(const mk_pair *p, mk_mf *m, mk_manifold_cache *ca
 
 static mk_status capsule_sphere(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_mf_from_hit(m, p, cache, mk_closest_capsule_sphere(p));
+    mk_mf_from_hit(m, p, cache, mk_closest_capsule_sphere(p->a->u.capsule.half_height, mk_v3(0, 0, 1), p->a->radius, p->t, p->b->radius));
     return MK_OK;
 }
 
 static mk_status box_sphere(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_mf_from_hit(m, p, cache, mk_closest_box_sphere(p));
+    mk_mf_from_hit(m, p, cache, mk_closest_box_sphere(p->a->u.half_extents, p->a->radius, p->t, p->b->radius));
     return MK_OK;
 }
 
 /* Two parallel capsules give two points: mk_mf_from_hit clips the segments. */
 static mk_status capsule_capsule(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_mf_from_hit(m, p, cache, mk_closest_capsule_capsule(p));
+    mk_mf_from_hit(m, p, cache, mk_closest_capsule_capsule(p->a->u.capsule.half_height, mk_v3(0, 0, 1), p->a->radius, p->t, p->r.c2,
+                                                           p->b->u.capsule.half_height, p->b->radius));
     return MK_OK;
 }
 
