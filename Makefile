@@ -180,8 +180,9 @@ check: deps
 #   DEMO_RUNS  += $(B)/demos/bench_broadphase --quick
 #   CHECK_BINS += $(B)/tests/adapter_runner      (extra test programs, run by test-run)
 # The run lists are expanded only when the recipe runs, after every fragment
-# has been read, and run one after another: benchmarks never share the CPU
-# with each other.
+# has been read, and run one after another by demos/run-list.sh (which cuts
+# the space-joined list back into commands at words naming executables):
+# benchmarks never share the CPU with each other.
 BENCH_DIR := $(B)/bench
 DEMO_BINS :=
 BENCH_RUNS :=
@@ -196,12 +197,13 @@ demo-build: lib $(DEMO_BINS)
 bench: deps
 	$(MAKE) -j$(JOBS) demo-build
 	@mkdir -p $(BENCH_DIR)
-	@set -e; $(foreach c,$(BENCH_RUNS),echo '>> $(c)'; $(c);) echo "bench: JSON Lines in $(BENCH_DIR)/"
+	@demos/run-list.sh $(BENCH_RUNS)
+	@echo "bench: JSON Lines in $(BENCH_DIR)/"
 	@demos/report.sh $(BENCH_DIR)
 demo: deps
 	$(MAKE) -j$(JOBS) demo-build
 	@mkdir -p $(BENCH_DIR)
-	@set -e; $(foreach c,$(DEMO_RUNS),echo '>> $(c)'; $(c);) true
+	@demos/run-list.sh $(DEMO_RUNS)
 
 # ---- install -----------------------------------------------------------------
 PREFIX ?= /usr/local
