@@ -818,6 +818,10 @@ int main(int argc, char **argv)
         else if (a == "--selftest") o.selftest = true;
         else if (a == "--list") o.list = true;
         else if (a == "--table") o.table = true;
+        else if (a == "--help") {
+            usage(argv[0]);
+            return 0;
+        }
         else if (a == "--json" && i + 1 < argc) o.json = argv[++i];
         else if (a == "--family" && i + 1 < argc) o.families.push_back(argv[++i]);
         else if (a == "--backend" && i + 1 < argc) o.backends.push_back(argv[++i]);
