@@ -176,12 +176,13 @@ check: deps
 # ---- demos, benchmarks, adapters: each area brings its own fragment ----------
 # A fragment registers itself by appending, e.g.
 #   DEMO_BINS  += $(B)/demos/bench_broadphase
-#   BENCH_RUNS += $(B)/demos/bench_broadphase --json $(BENCH_DIR)/broad.jsonl
-#   DEMO_RUNS  += $(B)/demos/bench_broadphase --quick
+#   BENCH_RUNS += $(call mk_run,$(B)/demos/bench_broadphase --json $(BENCH_DIR)/broad.jsonl)
+#   DEMO_RUNS  += $(call mk_run,$(B)/demos/bench_broadphase --quick)
 #   CHECK_BINS += $(B)/tests/adapter_runner      (extra test programs, run by test-run)
-# The run lists are expanded only when the recipe runs, after every fragment
-# has been read, and run one after another: benchmarks never share the CPU
-# with each other.
+# mk_run turns one command line into an echoed, ';'-terminated shell step, so
+# commands with arguments survive being collected in one variable. The steps
+# run one after another: benchmarks never share the CPU with each other.
+mk_run = echo '>> $(strip $(1))'; $(strip $(1));
 BENCH_DIR := $(B)/bench
 DEMO_BINS :=
 BENCH_RUNS :=
@@ -196,12 +197,12 @@ demo-build: lib $(DEMO_BINS)
 bench: deps
 	$(MAKE) -j$(JOBS) demo-build
 	@mkdir -p $(BENCH_DIR)
-	@set -e; $(foreach c,$(BENCH_RUNS),echo '>> $(c)'; $(c);) echo "bench: JSON Lines in $(BENCH_DIR)/"
+	@set -e; $(BENCH_RUNS) echo "bench: JSON Lines in $(BENCH_DIR)/"
 	@demos/report.sh $(BENCH_DIR)
 demo: deps
 	$(MAKE) -j$(JOBS) demo-build
 	@mkdir -p $(BENCH_DIR)
-	@set -e; $(foreach c,$(DEMO_RUNS),echo '>> $(c)'; $(c);) true
+	@set -e; $(DEMO_RUNS) true
 
 # ---- install -----------------------------------------------------------------
 PREFIX ?= /usr/local

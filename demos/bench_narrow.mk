@@ -18,8 +18,8 @@ $(B)/demos/bench_narrow: demos/bench_narrow.cc $(BN_SUPPORT) $(STATIC_LIB)
 
 -include $(B)/demos/bench_narrow.d
 DEMO_BINS += $(B)/demos/bench_narrow
-BENCH_RUNS += $(B)/demos/bench_narrow --json $(BENCH_DIR)/narrow.jsonl
-DEMO_RUNS += $(B)/demos/bench_narrow --quick
+BENCH_RUNS += $(call mk_run,$(B)/demos/bench_narrow --json $(BENCH_DIR)/narrow.jsonl)
+DEMO_RUNS += $(call mk_run,$(B)/demos/bench_narrow --quick)
 
 # The float companion, built by a sub-make with PRECISION=single.
 ifeq ($(PRECISION)-$(SAN),double-0)
@@ -28,8 +28,8 @@ BN_F32 := build/single/demos/bench_narrow
 $(BN_F32): bench-narrow-f32-always
 	$(Q)$(MAKE) --no-print-directory PRECISION=single SAN=0 $@
 DEMO_BINS += $(BN_F32)
-BENCH_RUNS += $(BN_F32) --json $(BENCH_DIR)/narrow.jsonl --append
-DEMO_RUNS += $(BN_F32) --quick
+BENCH_RUNS += $(call mk_run,$(BN_F32) --json $(BENCH_DIR)/narrow.jsonl --append)
+DEMO_RUNS += $(call mk_run,$(BN_F32) --quick)
 endif
 
 # make check runs a smoke test of the benchmark (non-sanitizer builds): every

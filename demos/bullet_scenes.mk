@@ -9,5 +9,5 @@ $(B)/demos/bullet_scenes: demos/bullet_scenes.cpp $(MKB_LIB) $(STATIC_LIB) $(B)/
 
 -include $(B)/demos/bullet_scenes.d
 DEMO_BINS += $(B)/demos/bullet_scenes
-BENCH_RUNS += $(B)/demos/bullet_scenes --json $(BENCH_DIR)/bullet_scenes.jsonl
-DEMO_RUNS += $(B)/demos/bullet_scenes --quick --json $(BENCH_DIR)/bullet_scenes_quick.jsonl
+BENCH_RUNS += $(call mk_run,$(B)/demos/bullet_scenes --json $(BENCH_DIR)/bullet_scenes.jsonl)
+DEMO_RUNS += $(call mk_run,$(B)/demos/bullet_scenes --quick --json $(BENCH_DIR)/bullet_scenes_quick.jsonl)

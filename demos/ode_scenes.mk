@@ -6,5 +6,5 @@ $(B)/demos/ode_scenes: demos/ode_scenes.c $(B)/tests/support/oracle.o $(ODE_LIB)
 
 -include $(B)/demos/ode_scenes.d
 DEMO_BINS += $(B)/demos/ode_scenes
-BENCH_RUNS += $(B)/demos/ode_scenes --json $(BENCH_DIR)/ode.jsonl
-DEMO_RUNS += $(B)/demos/ode_scenes --quick
+BENCH_RUNS += $(call mk_run,$(B)/demos/ode_scenes --json $(BENCH_DIR)/ode.jsonl)
+DEMO_RUNS += $(call mk_run,$(B)/demos/ode_scenes --quick)

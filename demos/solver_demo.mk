@@ -15,7 +15,7 @@ $(B)/demos/bench_contacts: demos/bench_contacts.cpp $(B)/tests/support/oracle.o 
 
 -include $(B)/demos/solver_demo.d $(B)/demos/bench_contacts.d
 DEMO_BINS += $(B)/demos/solver_demo $(B)/demos/bench_contacts
-BENCH_RUNS += $(B)/demos/solver_demo --json $(BENCH_DIR)/contacts_solver.jsonl
-BENCH_RUNS += $(B)/demos/bench_contacts --json $(BENCH_DIR)/contacts_box_box.jsonl
-DEMO_RUNS += $(B)/demos/solver_demo --quick --json $(BENCH_DIR)/contacts_solver_quick.jsonl
-DEMO_RUNS += $(B)/demos/bench_contacts --quick --json $(BENCH_DIR)/contacts_box_box_quick.jsonl
+BENCH_RUNS += $(call mk_run,$(B)/demos/solver_demo --json $(BENCH_DIR)/contacts_solver.jsonl)
+BENCH_RUNS += $(call mk_run,$(B)/demos/bench_contacts --json $(BENCH_DIR)/contacts_box_box.jsonl)
+DEMO_RUNS += $(call mk_run,$(B)/demos/solver_demo --quick --json $(BENCH_DIR)/contacts_solver_quick.jsonl)
+DEMO_RUNS += $(call mk_run,$(B)/demos/bench_contacts --quick --json $(BENCH_DIR)/contacts_box_box_quick.jsonl)

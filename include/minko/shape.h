@@ -44,7 +44,9 @@ typedef struct mk_hull_edge { uint16_t next, twin, origin, face; } mk_hull_edge;
 /* A convex polyhedron with merged coplanar faces (faces are convex polygons).
  * Built by mk_hull_create(); read-only afterwards. Memory is one block owned
  * by the hull. Complexity: creation O(n log n) expected (quickhull); the
- * support function hill-climbs the vertex adjacency, O(sqrt(V)) typical. */
+ * support function scans small hulls and hill-climbs the vertex adjacency of
+ * larger ones, O(sqrt(V)) typical. Each face's half-edges are stored
+ * contiguously in loop order. */
 typedef struct mk_hull {
     int vertex_count;
     int edge_count;            /* half-edges: twice the number of edges */
@@ -58,12 +60,15 @@ typedef struct mk_hull {
     mk_real inner_radius;      /* distance from centroid to the nearest face plane */
     mk_real outer_radius;      /* distance from centroid to the farthest vertex */
     mk_aabb bounds;            /* local AABB */
+    mk_real tolerance;         /* distance below which construction treated points as on a plane */
     mk_allocator allocator;    /* the allocator that owns this block */
     size_t bytes;              /* size of the block */
 } mk_hull;
 
 #define MK_HULL_MAX_POINTS 4096  /* input points accepted by mk_hull_create */
-#define MK_HULL_MAX_VERTICES 1024 /* vertices of the resulting hull */
+/* Vertices of a resulting hull. Every accepted cloud fits (a hull's vertices
+ * are input points), and 6V - 12 half-edges still fit the uint16_t indices. */
+#define MK_HULL_MAX_VERTICES MK_HULL_MAX_POINTS
 
 typedef struct mk_shape {
     mk_shape_type type;
@@ -101,6 +106,25 @@ MK_API mk_vec3 mk_shape_support(const mk_shape *s, mk_vec3 dir);
 /* World AABB of the shape at transform xf. Planes give infinite bounds except
  * along axes their normal is aligned with. */
 MK_API mk_status mk_shape_aabb(const mk_shape *s, mk_transform xf, mk_aabb *out);
+
+/* Quickhull of a point cloud. Duplicate points and points within a relative
+ * tolerance of a face are merged; coplanar faces are merged into polygons.
+ * Fewer than 4 points, or points that are all (nearly) collinear or coplanar,
+ * give MK_ERR_DEGENERATE; non-finite points MK_ERR_NOT_FINITE; more than
+ * MK_HULL_MAX_POINTS points MK_ERR_CAPACITY. `alloc` may be NULL.
+ * The tolerance is 16 ulps of the cloud's size: tol = 16 * MK_REAL_EPSILON *
+ * (ex + ey + ez), e the half-extents of the cloud's bounding box (recorded in
+ * hull->tolerance). Vertices are input points (bit-exact); every input point
+ * lies below every face plane, and every face's vertices on its plane, within
+ * a few tol; faces are convex polygons within tol; no two adjacent faces are
+ * coplanar within tol, except, in the float build, where merging them would
+ * move a vertex lying a few tol off an edge. Construction runs in double in
+ * both builds. Coordinates beyond the library's size limit give
+ * MK_ERR_BAD_SIZE. On failure *out is NULL and nothing stays allocated.
+ * Working memory comes from `alloc` (one block) and is freed. */
+MK_API mk_status mk_hull_create(const mk_vec3 *points, int count, const mk_allocator *alloc, mk_hull **out);
+/* Frees a hull made by mk_hull_create through its own allocator; NULL is a no-op. */
+MK_API void mk_hull_destroy(mk_hull *hull);
 
 /* Index of the hull vertex farthest along dir (hill climbing from `start`,
  * which may be any vertex index, e.g. the previous answer; -1 to start at 0). */
