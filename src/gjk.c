@@ -12,9 +12,10 @@
 
 typedef struct sv_sol {
     int n;
-    int idx[4];
+    int idx[4];   /* ascending, so the simplex can be compacted in place */
     mk_real l[4];
-    mk_real vv; /* |v|^2 of this candidate */
+    mk_vec3 v;    /* the nearest point */
+    mk_real vv;   /* |v|^2 */
 } sv_sol;
 
 static int same_sign(mk_real a, mk_real b) { return (a > 0 && b > 0) || (a < 0 && b < 0); }
@@ -32,15 +33,8 @@ static void sol_vertex(const mk_vec3 *w, int i, sv_sol *out)
     out->n = 1;
     out->idx[0] = i;
     out->l[0] = 1;
+    out->v = w[i];
     out->vv = mk_v3_len2(w[i]);
-}
-
-static void sol_finish(const mk_vec3 *w, sv_sol *s)
-{
-    mk_vec3 v = mk_v3_zero();
-    int k;
-    for (k = 0; k < s->n; ++k) v = mk_v3_mad(v, s->l[k], w[s->idx[k]]);
-    s->vv = mk_v3_len2(v);
 }
 
 /* Keeps the better of two candidates in *best. NaN distances never win. */
@@ -49,142 +43,143 @@ static void sol_keep(sv_sol *best, const sv_sol *c)
     if (c->vv < best->vv || !(best->vv == best->vv)) *best = *c;
 }
 
-static void sv_1d(const mk_vec3 *w, int i1, int i2, sv_sol *out)
+/* Segment (i, j), i < j. */
+static void sv_1d(const mk_vec3 *w, int i, int j, sv_sol *out)
 {
-    mk_vec3 s1 = w[i1], s2 = w[i2], t = mk_v3_sub(s2, s1), p0;
+    mk_vec3 s1 = w[i], s2 = w[j], t = mk_v3_sub(s2, s1), p0;
     mk_real tt = mk_v3_len2(t), mu, c1, c2;
     int k;
     if (!(tt > 0)) {
-        sol_vertex(w, i1, out);
+        sol_vertex(w, j, out);
         return;
     }
     p0 = mk_v3_mad(s1, -mk_v3_dot(s1, t) / tt, t); /* the origin projected on the line */
     k = max_abs_axis(t);
     mu = axis(s1, k) - axis(s2, k);
-    c1 = axis(p0, k) - axis(s2, k);
-    c2 = axis(s1, k) - axis(p0, k);
+    c1 = axis(p0, k) - axis(s2, k); /* weight of s1, times mu */
+    c2 = axis(s1, k) - axis(p0, k); /* weight of s2, times mu */
     if (!same_sign(mu, c2)) {
-        sol_vertex(w, i1, out);
+        sol_vertex(w, i, out);
     } else if (!same_sign(mu, c1)) {
-        sol_vertex(w, i2, out);
+        sol_vertex(w, j, out);
     } else {
         out->n = 2;
-        out->idx[0] = i1;
-        out->idx[1] = i2;
+        out->idx[0] = i;
+        out->idx[1] = j;
         out->l[0] = c1 / mu;
-        out->l[1] = 1 - out->l[0];
-        sol_finish(w, out);
+        out->l[1] = c2 / mu;
+        out->v = p0;
+        out->vv = mk_v3_len2(p0);
     }
 }
 
-/* Twice the signed area of (p, b, c) in the plane of axes (i, j). */
-static mk_real area2(mk_vec3 p, mk_vec3 b, mk_vec3 c, int i, int j)
+/* Triangle (i, j, k), i < j < k. The areas are taken in the coordinate plane
+ * the triangle projects to with the largest area. */
+static void sv_2d(const mk_vec3 *w, int i, int j, int k, sv_sol *out)
 {
-    return (axis(b, i) - axis(p, i)) * (axis(c, j) - axis(p, j)) - (axis(b, j) - axis(p, j)) * (axis(c, i) - axis(p, i));
-}
-
-static void sv_2d(const mk_vec3 *w, int i1, int i2, int i3, sv_sol *out)
-{
-    const int ids[3] = {i1, i2, i3};
-    mk_vec3 s1 = w[i1], s2 = w[i2], s3 = w[i3];
+    const int ids[3] = {i, j, k};
+    mk_vec3 s1 = w[i], s2 = w[j], s3 = w[k];
     mk_vec3 n = mk_v3_cross(mk_v3_sub(s2, s1), mk_v3_sub(s3, s1)), p0;
-    mk_real nn = mk_v3_len2(n), mu, c[3];
-    int k, i, j, m, inside = 1;
+    mk_real nn = mk_v3_len2(n), mu = 0, c[3] = {0, 0, 0};
+    int m;
     if (nn > 0) {
+        int ax = max_abs_axis(n), u = (ax + 1) % 3, v = (ax + 2) % 3; /* (u, v) cyclic after ax: area sign = sign of n_ax */
+        mk_real px, py, x1, y1, x2, y2, x3, y3;
         p0 = mk_v3_scale(n, mk_v3_dot(s1, n) / nn); /* the origin projected on the plane */
-        /* Project along the normal's largest component; (i, j) cyclic after k so
-         * the projected area has the sign of n_k. */
-        k = max_abs_axis(n);
-        i = (k + 1) % 3;
-        j = (k + 2) % 3;
-        mu = axis(n, k);
-        c[0] = area2(p0, s2, s3, i, j);
-        c[1] = area2(p0, s3, s1, i, j);
-        c[2] = area2(p0, s1, s2, i, j);
-        for (m = 0; m < 3; ++m) inside = inside && same_sign(mu, c[m]);
-        if (inside) {
+        px = axis(p0, u);
+        py = axis(p0, v);
+        x1 = axis(s1, u) - px;
+        y1 = axis(s1, v) - py;
+        x2 = axis(s2, u) - px;
+        y2 = axis(s2, v) - py;
+        x3 = axis(s3, u) - px;
+        y3 = axis(s3, v) - py;
+        mu = axis(n, ax);
+        c[0] = x2 * y3 - y2 * x3; /* area (p0, s2, s3): weight of s1 */
+        c[1] = x3 * y1 - y3 * x1;
+        c[2] = x1 * y2 - y1 * x2;
+        if (same_sign(mu, c[0]) && same_sign(mu, c[1]) && same_sign(mu, c[2])) {
             mk_real sum = c[0] + c[1] + c[2];
             out->n = 3;
             for (m = 0; m < 3; ++m) {
                 out->idx[m] = ids[m];
                 out->l[m] = c[m] / sum;
             }
-            sol_finish(w, out);
+            out->v = p0;
+            out->vv = mk_v3_len2(p0);
             return;
         }
-    } else {
-        c[0] = c[1] = c[2] = 0;
-        mu = 0;
     }
-    /* Outside (or degenerate): the nearest point is on an edge whose opposite vertex has the wrong sign. */
+    /* Outside (or degenerate): the nearest point is on an edge whose opposite
+     * vertex has the wrong sign (every edge, for a degenerate triangle). */
     out->n = 0;
     out->vv = (mk_real)HUGE_VAL;
     for (m = 0; m < 3; ++m) {
         sv_sol e;
         if (same_sign(mu, c[m])) continue;
-        sv_1d(w, ids[(m + 1) % 3], ids[(m + 2) % 3], &e);
+        sv_1d(w, ids[m == 0 ? 1 : 0], ids[m == 2 ? 1 : 2], &e);
         sol_keep(out, &e);
     }
-    if (out->n == 0) sol_vertex(w, i1, out); /* only reached with NaN input */
+    if (out->n == 0) sol_vertex(w, k, out); /* only reached with NaN input */
 }
 
 static void sv_3d(const mk_vec3 *w, sv_sol *out)
 {
+    static const int face[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
     mk_vec3 s1 = w[0], s2 = w[1], s3 = w[2], s4 = w[3];
+    mk_vec3 x34 = mk_v3_cross(s3, s4);
     mk_real c[4], mu;
-    int m, inside = 1;
+    int m;
     /* c[j]: signed volume of the tetrahedron with vertex j replaced by the origin. */
-    c[0] = mk_v3_dot(s2, mk_v3_cross(s3, s4));
-    c[1] = -mk_v3_dot(s1, mk_v3_cross(s3, s4));
+    c[0] = mk_v3_dot(s2, x34);
+    c[1] = -mk_v3_dot(s1, x34);
     c[2] = mk_v3_dot(s1, mk_v3_cross(s2, s4));
     c[3] = -mk_v3_dot(s1, mk_v3_cross(s2, s3));
     mu = c[0] + c[1] + c[2] + c[3];
-    for (m = 0; m < 4; ++m) inside = inside && same_sign(mu, c[m]);
-    if (inside) {
+    if (same_sign(mu, c[0]) && same_sign(mu, c[1]) && same_sign(mu, c[2]) && same_sign(mu, c[3])) {
         out->n = 4;
         for (m = 0; m < 4; ++m) {
             out->idx[m] = m;
             out->l[m] = c[m] / mu;
         }
+        out->v = mk_v3_zero();
         out->vv = 0;
         return;
     }
     out->n = 0;
     out->vv = (mk_real)HUGE_VAL;
     for (m = 0; m < 4; ++m) {
-        static const int face[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
         sv_sol f;
         if (same_sign(mu, c[m])) continue;
         sv_2d(w, face[m][0], face[m][1], face[m][2], &f);
         sol_keep(out, &f);
     }
-    if (out->n == 0) sol_vertex(w, 0, out);
+    if (out->n == 0) sol_vertex(w, 3, out);
 }
 
-/* Reduces s to the sub-simplex nearest the origin; returns v, the nearest point. */
-static mk_vec3 solve(mk_simplex *s)
+/* The sub-simplex of s nearest the origin, from the positions alone; s is
+ * not touched, so a step that makes no progress costs no restore. */
+static void solve(const mk_simplex *s, sv_sol *sol)
 {
-    mk_vec3 w[4], v = mk_v3_zero();
-    mk_cso_vertex old[4];
-    sv_sol sol;
+    mk_vec3 w[4];
     int k;
-    for (k = 0; k < s->n; ++k) {
-        w[k] = s->v[k].w;
-        old[k] = s->v[k];
-    }
+    for (k = 0; k < s->n; ++k) w[k] = s->v[k].w;
     switch (s->n) {
-    case 1: sol_vertex(w, 0, &sol); break;
-    case 2: sv_1d(w, 0, 1, &sol); break;
-    case 3: sv_2d(w, 0, 1, 2, &sol); break;
-    default: sv_3d(w, &sol); break;
+    case 1: sol_vertex(w, 0, sol); break;
+    case 2: sv_1d(w, 0, 1, sol); break;
+    case 3: sv_2d(w, 0, 1, 2, sol); break;
+    default: sv_3d(w, sol); break;
     }
-    s->n = sol.n;
-    for (k = 0; k < sol.n; ++k) {
-        s->v[k] = old[sol.idx[k]];
-        s->l[k] = sol.l[k];
-        v = mk_v3_mad(v, sol.l[k], w[sol.idx[k]]);
+}
+
+static void commit(mk_simplex *s, const sv_sol *sol)
+{
+    int k;
+    for (k = 0; k < sol->n; ++k) {
+        if (sol->idx[k] != k) s->v[k] = s->v[sol->idx[k]];
+        s->l[k] = sol->l[k];
     }
-    return sol.n == 4 ? mk_v3_zero() : v;
+    s->n = sol->n;
 }
 
 /* Search direction towards the origin, perpendicular to the simplex by
@@ -246,58 +241,42 @@ static mk_vec3 initial_direction(const mk_pair *p, const mk_gjk_cache *c)
 
 void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real radius, mk_gjk_result *out)
 {
-    mk_simplex s, saved;
-    mk_vec3 v, v_saved, d;
-    mk_real vv, vv_prev = (mk_real)HUGE_VAL, scale2 = 0, lower = -(mk_real)HUGE_VAL;
-    int iter, k, ha = -1, hb = -1;
+    mk_simplex *s = &out->s;
+    sv_sol sol;
+    mk_real scale2 = 0, lower = -(mk_real)HUGE_VAL;
+    int iter, k, ha = -1, hb = -1, overlap = 0;
     mk_solve_state state = MK_SOLVE_MAX_ITERATIONS;
-    int overlap = 0;
 
     out->normal = mk_v3(1, 0, 0);
-    if (cache && warm_simplex(p, cache, &s) > 0) {
+    if (cache && warm_simplex(p, cache, s) > 0) {
         ha = cache->ia[0];
         hb = cache->ib[0];
     } else {
-        s.n = 1;
-        s.v[0] = mk_pair_support(p, initial_direction(p, cache), -1, -1);
-        ha = s.v[0].ia;
-        hb = s.v[0].ib;
+        s->n = 1;
+        s->v[0] = mk_pair_support(p, initial_direction(p, cache), -1, -1);
+        ha = s->v[0].ia;
+        hb = s->v[0].ib;
     }
-    for (k = 0; k < s.n; ++k) scale2 = mk_max(scale2, mk_v3_len2(s.v[k].w));
-    v = solve(&s);
-    vv = mk_v3_len2(v);
-    saved = s;
-    v_saved = v;
+    for (k = 0; k < s->n; ++k) scale2 = mk_max(scale2, mk_v3_len2(s->v[k].w));
+    solve(s, &sol);
+    commit(s, &sol);
 
     for (iter = 0; iter < MK_GJK_MAX_ITERATIONS; ++iter) {
         mk_cso_vertex w;
-        mk_real dn, lo, u, tol_abs;
-        if (s.n == 4) { /* the origin is inside the tetrahedron */
+        mk_vec3 d;
+        mk_real dn, lo, u, tol_abs = MK_GJK_ABS_TOL * mk_sqrt_(scale2);
+        if (s->n == 4 || sol.vv <= tol_abs * tol_abs) { /* origin inside, or on the simplex to rounding */
             overlap = 1;
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        tol_abs = MK_GJK_ABS_TOL * mk_sqrt_(scale2);
-        if (vv <= tol_abs * tol_abs) { /* the origin is on the simplex (touching), to rounding */
-            overlap = 1;
-            state = MK_SOLVE_CONVERGED;
-            break;
-        }
-        /* Strict decrease, written so a NaN also stops: otherwise keep the previous simplex. */
-        if (!(vv < vv_prev)) {
-            s = saved;
-            v = v_saved;
-            vv = vv_prev;
-            state = (vv == vv) ? MK_SOLVE_CONVERGED : MK_SOLVE_DEGENERATE;
-            break;
-        }
-        u = mk_sqrt_(vv);
+        u = mk_sqrt_(sol.vv);
         if (boolean && u <= radius) {
             overlap = 1;
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        d = direction(&s, v);
+        d = direction(s, sol.v);
         dn = mk_v3_len(d);
         if (!(dn > 0)) {
             state = MK_SOLVE_DEGENERATE;
@@ -317,22 +296,30 @@ void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real ra
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        if (repeated(&s, &w) || u - lower <= MK_GJK_REL_TOL * u + MK_GJK_ABS_TOL * mk_sqrt_(scale2)) {
+        if (repeated(s, &w) || u - lower <= MK_GJK_REL_TOL * u + MK_GJK_ABS_TOL * mk_sqrt_(scale2)) {
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        saved = s;
-        v_saved = v;
-        vv_prev = vv;
-        s.v[s.n++] = w;
-        v = solve(&s);
-        vv = mk_v3_len2(v);
+        /* Add w; keep the result only on a strict decrease (written so a NaN also stops). */
+        {
+            mk_real vv_prev = sol.vv;
+            mk_vec3 v_prev = sol.v;
+            s->v[s->n++] = w;
+            solve(s, &sol);
+            if (!(sol.vv < vv_prev)) {
+                s->n--;
+                sol.vv = vv_prev;
+                sol.v = v_prev;
+                state = vv_prev == vv_prev ? MK_SOLVE_CONVERGED : MK_SOLVE_DEGENERATE;
+                break;
+            }
+            commit(s, &sol);
+        }
     }
     /* Converged without an early answer: decide by the (tight) lower bound. */
     if (boolean && !overlap) overlap = !(lower > radius);
-    out->s = s;
-    out->v = v;
-    out->upper = overlap ? 0 : mk_sqrt_(vv);
+    out->v = sol.v;
+    out->upper = overlap ? 0 : mk_sqrt_(sol.vv);
     out->lower = lower;
     out->scale = mk_sqrt_(scale2);
     out->overlap = overlap;
