@@ -21,6 +21,7 @@
 
 #include "minko_ode.h"
 #include "support/mk_test.h"
+#include "support/oracle.h"
 
 #if defined(MK_SINGLE)
 #  define TOL 2e-5 /* relative to the sizes (about 1) in a float build */
@@ -606,8 +607,19 @@ START_TEST(test_box_box_matches_ode)
             const dReal *p = dGeomGetPosition(a);
             for (j = 0; j < nn; j++) nat_depth = nat[j].depth > nat_depth ? nat[j].depth : nat_depth;
             if (fabs(got[0].depth - nat_depth) <= TOL && fabs(dot3(got[0].normal, nat[0].normal) - 1) <= TOL) agree++;
-            /* Minko's depth is the minimum over all axes: never more than ODE's. */
+            /* Minko's depth is the minimum over all axes: never more than ODE's, and exactly the oracle's. */
             ck_assert_msg(got[0].depth <= nat_depth + TOL, "depth %.17g > ODE %.17g", got[0].depth, nat_depth);
+            {
+                mk_shape sa, sb;
+                mk_oracle_result o;
+                dQuaternion q;
+                dGeomGetQuaternion(a, q);
+                mk_shape_box(mk_v3(0.5, 0.7, 0.3), 0, &sa);
+                mk_shape_box(mk_v3(1, 0.9, 0.25), 0, &sb);
+                ck_assert_int_eq(mk_oracle_distance(&sa, mk_transform_make(mk_v3(p[0], p[1], p[2]), mk_quat_make(q[1], q[2], q[3], q[0])),
+                                                    &sb, mk_transform_make(mk_v3(10, 0, 0), mk_quat_identity()), &o), 0);
+                MK_ASSERT_NEAR(got[0].depth, -(double)o.distance, 100 * TOL);
+            }
             dGeomSetPosition(a, p[0] + got[0].normal[0] * (got[0].depth + 1e-6), p[1] + got[0].normal[1] * (got[0].depth + 1e-6),
                              p[2] + got[0].normal[2] * (got[0].depth + 1e-6));
             ck_assert_int_eq(dCollide(a, b, MAXC, after, sizeof(dContactGeom)), 0);
@@ -615,9 +627,11 @@ START_TEST(test_box_box_matches_ode)
         dGeomDestroy(a);
         dGeomDestroy(b);
     }
-    /* dBoxBox prefers face normals by a 5 % fudge factor, so a few poses may
-     * legitimately differ; most must agree exactly. */
-    ck_assert_msg(agree >= 180, "only %d of 200 box-box poses agree with ODE", agree);
+    /* dBoxBox prefers face normals by a 5 % fudge factor, so where an edge
+     * pair is the true minimum axis it reports a deeper face contact; Minko
+     * is checked against the exact depth above, and the share of poses where
+     * the two agree is information, not a pass criterion. */
+    fprintf(stderr, "test_box_box_matches_ode: %d of 200 poses agree exactly with dBoxBox\n", agree);
     mk_ode_close();
 }
 END_TEST
