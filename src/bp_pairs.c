@@ -135,6 +135,7 @@ static mk_pair_entry *insert(mk_bp *bp, uint64_t key, mk_status *st)
     *s = (uint32_t)t->count;
     t->e[t->count].key = key;
     t->e[t->count].state = 0;
+    t->e[t->count].wake = 0;
     return &t->e[t->count++];
 }
 
@@ -279,6 +280,7 @@ void mk_pairs_full_end_(mk_bp *bp)
         *find_slot(t, t->scratch[i]) = (uint32_t)i;
         t->e[i].key = t->scratch[i];
         t->e[i].state = MK_PS_LIVE | MK_PS_REPORTED;
+        t->e[i].wake = 0;
     }
     t->count = n;
     t->full = 2; /* events are made: mk_pairs_finish_ has nothing to add */

@@ -159,10 +159,8 @@ static mk_status check_box(mk_aabb b)
 {
     const mk_real *lo = &b.lo.x, *hi = &b.hi.x;
     int k;
-    for (k = 0; k < 3; ++k) {
-        if (lo[k] != lo[k] || hi[k] != hi[k]) return MK_ERR_BAD_AABB;
+    for (k = 0; k < 3; ++k) /* NaN fails every comparison */
         if (!(lo[k] <= hi[k]) || !(lo[k] <= MK_REAL_MAX) || !(hi[k] >= -MK_REAL_MAX)) return MK_ERR_BAD_AABB;
-    }
     return MK_OK;
 }
 
@@ -502,6 +500,7 @@ mk_status mk_bp_get_stats(const mk_bp *bp, mk_bp_stats *out)
     out->proxies = bp->live;
     out->static_proxies = bp->statics;
     out->pairs = bp->pairs.set_count;
+    out->candidates = bp->pairs.count;
     out->added = bp->pairs.added_count;
     out->removed = bp->pairs.removed_count;
     out->full_rebuilds = bp->full_rebuilds;

@@ -31,7 +31,8 @@ enum {
     MK_PS_REJECTED = 32  /* grid: overlapping but the filter said no */
 };
 
-typedef struct mk_pair_entry { uint64_t key; uint32_t state; uint32_t pad_; } mk_pair_entry;
+/* wake: the grid's re-test threshold on the two proxies' summed travel (0 = test). */
+typedef struct mk_pair_entry { uint64_t key; uint32_t state; float wake; } mk_pair_entry;
 
 /* Open-addressing pair table: dense entries, a linear-probing index of
  * entry numbers (backward-shift deletion, no tombstones) keyed by

@@ -12,41 +12,39 @@ static mk_hit grow(mk_vec3 a, mk_vec3 b, mk_real dc, mk_vec3 n, mk_real ra, mk_r
     return h;
 }
 
-mk_hit mk_closest_box_sphere(const mk_pair *p)
+mk_hit mk_closest_box_sphere(mk_vec3 h, mk_real ra, mk_vec3 c, mk_real rb)
 {
-    mk_vec3 h = p->a->u.half_extents, c = p->t;
     mk_vec3 q = mk_v3(mk_clamp(c.x, -h.x, h.x), mk_clamp(c.y, -h.y, h.y), mk_clamp(c.z, -h.z, h.z));
     mk_vec3 dv = mk_v3_sub(c, q), n;
-    mk_real l = mk_v3_len(dv);
-    if (l > 0) return grow(q, c, l, mk_v3_scale(dv, 1 / l), p->a->radius, p->b->radius);
-    {
-        /* Centre inside the core: leave through the nearest face. */
-        mk_real gx = h.x - mk_fabs_(c.x), gy = h.y - mk_fabs_(c.y), gz = h.z - mk_fabs_(c.z), g;
-        if (gx <= gy && gx <= gz) {
-            g = gx;
-            n = mk_v3(c.x >= 0 ? 1 : -1, 0, 0);
-            q.x = c.x >= 0 ? h.x : -h.x;
-        } else if (gy <= gz) {
-            g = gy;
-            n = mk_v3(0, c.y >= 0 ? 1 : -1, 0);
-            q.y = c.y >= 0 ? h.y : -h.y;
-        } else {
-            g = gz;
-            n = mk_v3(0, 0, c.z >= 0 ? 1 : -1);
-            q.z = c.z >= 0 ? h.z : -h.z;
-        }
-        return grow(q, c, -g, n, p->a->radius, p->b->radius);
+    mk_real l = mk_v3_len(dv), gx, gy, gz, g;
+    if (l > 0) return grow(q, c, l, mk_v3_scale(dv, 1 / l), ra, rb);
+    /* Centre inside the core: leave through the nearest face. */
+    gx = h.x - mk_fabs_(c.x);
+    gy = h.y - mk_fabs_(c.y);
+    gz = h.z - mk_fabs_(c.z);
+    if (gx <= gy && gx <= gz) {
+        g = gx;
+        n = mk_v3(c.x >= 0 ? 1 : -1, 0, 0);
+        q.x = c.x >= 0 ? h.x : -h.x;
+    } else if (gy <= gz) {
+        g = gy;
+        n = mk_v3(0, c.y >= 0 ? 1 : -1, 0);
+        q.y = c.y >= 0 ? h.y : -h.y;
+    } else {
+        g = gz;
+        n = mk_v3(0, 0, c.z >= 0 ? 1 : -1);
+        q.z = c.z >= 0 ? h.z : -h.z;
     }
+    return grow(q, c, -g, n, ra, rb);
 }
 
-mk_hit mk_closest_capsule_sphere(const mk_pair *p)
+mk_hit mk_closest_capsule_sphere(mk_real hh, mk_vec3 u, mk_real ra, mk_vec3 c, mk_real rb)
 {
-    mk_real hh = p->a->u.capsule.half_height;
-    mk_vec3 c = p->t, q = mk_v3(0, 0, mk_clamp(c.z, -hh, hh)), dv = mk_v3_sub(c, q);
+    mk_vec3 q = mk_v3_scale(u, mk_clamp(mk_v3_dot(c, u), -hh, hh)), dv = mk_v3_sub(c, q);
     mk_real l = mk_v3_len(dv);
-    /* Centre on the segment: any direction across the axis is a shortest way out; take +x. */
-    mk_vec3 n = l > 0 ? mk_v3_scale(dv, 1 / l) : mk_v3(1, 0, 0);
-    return grow(q, c, l, n, p->a->radius, p->b->radius);
+    /* Centre on the segment: any direction across the axis is a shortest way out. */
+    mk_vec3 n = l > 0 ? mk_v3_scale(dv, 1 / l) : mk_v3_perp(u);
+    return grow(q, c, l, n, ra, rb);
 }
 
 void mk_segment_segment(mk_vec3 p0, mk_vec3 p1, mk_vec3 q0, mk_vec3 q1, mk_real *s_out, mk_real *t_out)
@@ -69,12 +67,12 @@ void mk_segment_segment(mk_vec3 p0, mk_vec3 p1, mk_vec3 q0, mk_vec3 q1, mk_real 
     *t_out = t;
 }
 
-mk_hit mk_closest_capsule_capsule(const mk_pair *p)
+mk_hit mk_closest_capsule_capsule(mk_real ha, mk_vec3 u, mk_real ra, mk_vec3 c, mk_vec3 v, mk_real hb, mk_real rb)
 {
-    mk_real ha = p->a->u.capsule.half_height, hb = p->b->u.capsule.half_height, s, t, l;
-    mk_vec3 p0 = mk_v3(0, 0, -ha), p1 = mk_v3(0, 0, ha);
-    mk_vec3 q0 = mk_v3_mad(p->t, -hb, p->r.c2), q1 = mk_v3_mad(p->t, hb, p->r.c2);
-    mk_vec3 pa, pb, dv, n = mk_v3_zero(), axes;
+    mk_real s, t, l;
+    mk_vec3 p0 = mk_v3_scale(u, -ha), p1 = mk_v3_scale(u, ha);
+    mk_vec3 q0 = mk_v3_mad(c, -hb, v), q1 = mk_v3_mad(c, hb, v);
+    mk_vec3 pa, pb, dv, n, axes;
     mk_segment_segment(p0, p1, q0, q1, &s, &t);
     pa = mk_v3_lerp(p0, p1, s);
     pb = mk_v3_lerp(q0, q1, t);
@@ -85,10 +83,10 @@ mk_hit mk_closest_capsule_capsule(const mk_pair *p)
      * two lines (no error from s and t). Also the only sane normal when the
      * cores cross (l == 0). Its direction error is about eps / sin(angle), so
      * below sin^2 = sqrt(eps) the difference of the points is the better normal. */
-    axes = mk_v3_cross(mk_v3(0, 0, 1), p->r.c2);
+    axes = mk_v3_cross(u, v);
     if (s > 0 && s < 1 && t > 0 && t < 1 && mk_v3_len2(axes) > mk_sqrt_(MK_REAL_EPSILON)) {
         n = mk_v3_normalize(axes);
-        if (mk_v3_dot(n, l > 0 ? dv : p->t) < 0) n = mk_v3_neg(n);
+        if (mk_v3_dot(n, l > 0 ? dv : c) < 0) n = mk_v3_neg(n);
         l = mk_v3_dot(n, mk_v3_sub(q0, p0));
         if (l < 0) l = 0;
         pb = mk_v3_mad(pa, l, n);
@@ -96,10 +94,10 @@ mk_hit mk_closest_capsule_capsule(const mk_pair *p)
         n = mk_v3_scale(dv, 1 / l);
     } else {
         /* Parallel cores that overlap: leave across the axis, towards B's centre if it is off the axis. */
-        mk_vec3 off = mk_v3(p->t.x, p->t.y, 0);
-        n = mk_v3_len2(off) > 0 ? mk_v3_normalize(off) : mk_v3(1, 0, 0);
+        mk_vec3 off = mk_v3_mad(c, -mk_v3_dot(c, u), u);
+        n = mk_v3_len2(off) > 0 ? mk_v3_normalize(off) : mk_v3_perp(u);
     }
-    return grow(pa, pb, l, n, p->a->radius, p->b->radius);
+    return grow(pa, pb, l, n, ra, rb);
 }
 
 mk_hit mk_closest_shape_plane(const mk_pair *p)

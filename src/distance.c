@@ -1,8 +1,5 @@
 /* distance.c: public pair queries: validation, the dispatch table, GJK + EPA composition. */
 #include "closest.h"
-#ifndef MK_WITHOUT_GJK
-#  include "polish.h"
-#endif
 #ifndef MK_WITHOUT_EPA
 #  include "epa.h"
 #endif
@@ -42,19 +39,47 @@ static const route routes[MK_SHAPE_TYPE_COUNT][MK_SHAPE_TYPE_COUNT] = {
 
 /* ---- validation ----------------------------------------------------------- */
 
-static mk_status check_pose(mk_transform *x)
+/* Every query pays this, so the accepting path is short: v - v is 0 for a
+ * finite v and NaN otherwise, and a NaN or infinite quaternion fails the
+ * unit-length test, after which we only work out which error to name. A
+ * quaternion within MK_QUAT_TOLERANCE is accepted; paths that use it
+ * renormalise it (unit). */
+MK_ALWAYS_INLINE mk_status check_pose(mk_transform x)
 {
-    if (!mk_v3_is_valid(x->p) || !mk_real_is_valid(x->q.x + x->q.y + x->q.z + x->q.w)) return MK_ERR_NOT_FINITE;
-    if (!mk_quat_is_valid(x->q)) return MK_ERR_BAD_ROTATION;
-    x->q = mk_quat_normalize(x->q); /* within tolerance: renormalise so no accuracy is lost */
-    return MK_OK;
+    mk_quat q = x.q;
+    if ((x.p.x - x.p.x) + (x.p.y - x.p.y) + (x.p.z - x.p.z) != 0) return MK_ERR_NOT_FINITE;
+    if (mk_fabs_(mk_quat_len2(q) - 1) <= MK_QUAT_TOLERANCE) return MK_OK;
+    return mk_real_is_valid(q.x) && mk_real_is_valid(q.y) && mk_real_is_valid(q.z) && mk_real_is_valid(q.w)
+               ? MK_ERR_BAD_ROTATION
+               : MK_ERR_NOT_FINITE;
 }
 
-static mk_status check_inputs(const mk_shape *a, mk_transform *xa, const mk_shape *b, mk_transform *xb, const void *out)
+/* The closed forms' shapes, accepted without a call: exactly what
+ * mk_shape_validate accepts for them (sizes in (0, MK_MAX_SIZE], NaN fails
+ * every comparison); anything else goes to mk_shape_validate, which names the
+ * error and knows every other shape. */
+MK_ALWAYS_INLINE int primitive_ok(const mk_shape *s)
+{
+    mk_real r = s->radius;
+    switch (s->type) {
+    case MK_SHAPE_SPHERE: return r > 0 && r <= MK_MAX_SIZE;
+    case MK_SHAPE_CAPSULE: return r > 0 && r <= MK_MAX_SIZE && s->u.capsule.half_height > 0 && s->u.capsule.half_height <= MK_MAX_SIZE;
+    case MK_SHAPE_BOX: {
+        mk_vec3 h = s->u.half_extents;
+        return r >= 0 && r <= MK_MAX_SIZE && h.x > 0 && h.x <= MK_MAX_SIZE && h.y > 0 && h.y <= MK_MAX_SIZE && h.z > 0 &&
+               h.z <= MK_MAX_SIZE;
+    }
+    default: return 0;
+    }
+}
+
+MK_ALWAYS_INLINE mk_status check_inputs(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb,
+                                        const void *out)
 {
     mk_status st;
     if (!a || !b || !out) return MK_ERR_NULL;
-    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
+    if (!primitive_ok(a) && (st = mk_shape_validate(a)) != MK_OK) return st;
+    if (!primitive_ok(b) && (st = mk_shape_validate(b)) != MK_OK) return st;
     if ((st = check_pose(xa)) != MK_OK) return st;
     return check_pose(xb);
 }
@@ -89,6 +114,21 @@ static void weighted(const mk_cso_vertex *v, const mk_real *l, int n, mk_vec3 *a
     }
 }
 
+/* Witness points for a final distance d along n, centred on the solver's
+ * points pa, pb, so that b - a = d n holds to rounding. */
+static void witnesses(mk_vec3 pa, mk_vec3 pb, mk_real d, mk_vec3 n, mk_vec3 *a, mk_vec3 *b)
+{
+    mk_vec3 m = mk_v3_scale(mk_v3_add(pa, pb), MK_REAL(0.5));
+    *a = mk_v3_mad(m, -MK_REAL(0.5) * d, n);
+    *b = mk_v3_mad(m, MK_REAL(0.5) * d, n);
+}
+
+/* The reported distance is always sep(n) along the solver's final normal,
+ * evaluated with the support functions: an exact lower bound, equal to the
+ * distance at the optimum. For polytopes the final normal is the cross
+ * product of CSO vertex differences, which are the original feature edges
+ * (w1 - w0 = a1 - a0 when both share b), so distance and normal come out
+ * exact to rounding of the relative pose rather than to a solver tolerance. */
 static mk_status iterative(const mk_pair *p, mk_gjk_cache *cache, answer *ans)
 {
     mk_gjk_result g;
@@ -99,7 +139,7 @@ static mk_status iterative(const mk_pair *p, mk_gjk_cache *cache, answer *ans)
     ans->state = g.state;
     if (!g.overlap) {
         n = g.normal;
-        sep = mk_polish(p, g.s.v, g.s.n, g.lower, &n);
+        sep = g.lower;
         if (!(sep > -(mk_real)HUGE_VAL)) { /* no lower bound at all (degenerate start): use |v| */
             sep = g.upper;
             n = mk_v3_len2(g.v) > 0 ? mk_v3_normalize(mk_v3_neg(g.v)) : mk_v3(1, 0, 0);
@@ -114,33 +154,68 @@ static mk_status iterative(const mk_pair *p, mk_gjk_cache *cache, answer *ans)
         int ha = -1, hb = -1;
         mk_epa(p, &g.s, g.scale, &e);
         n = e.normal;
-        sep = mk_polish(p, e.face, 3, mk_pair_separation(p, n, &ha, &hb), &n);
+        sep = mk_pair_separation(p, n, &ha, &hb);
         weighted(e.face, e.l, 3, &pa, &pb);
         ans->iterations += e.iterations;
         if (e.state != MK_SOLVE_CONVERGED) ans->state = e.state;
         ans->method = MK_METHOD_EPA;
 #endif
     }
-    mk_polish_witness(pa, pb, sep, n, &pa, &pb);
+    witnesses(pa, pb, sep, n, &pa, &pb);
     ans->hit = grow_core(pa, pb, sep, n, p);
     if (cache) mk_gjk_cache_store(&g.s, n, cache);
     return MK_OK;
 }
 #endif
 
+mk_status mk_pair_distance(const mk_pair *p, mk_gjk_cache *cache, mk_hit *out)
+{
+#ifdef MK_WITHOUT_GJK
+    (void)p;
+    (void)cache;
+    (void)out;
+    return MK_ERR_UNSUPPORTED;
+#else
+    answer ans;
+    mk_status st = iterative(p, cache, &ans);
+    if (st == MK_OK) *out = ans.hit;
+    return st;
+#endif
+}
+
 /* ---- composition ---------------------------------------------------------- */
 
+/* Runs a path in the frame of its first shape: A's rotation goes to *ra for
+ * the way back (the identity for capsule paths, which run world-aligned about
+ * A's centre). Only what the path uses is computed: a sphere's rotation never
+ * matters, a capsule is its axis. */
 static mk_status run(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, path pth,
-                     mk_gjk_cache *cache, answer *ans)
+                     mk_gjk_cache *cache, mk_mat3 *ra, answer *ans)
 {
-    mk_pair p = mk_pair_make(a, xa, b, xb);
+    mk_pair p;
+    mk_vec3 c = mk_v3_sub(xb.p, xa.p);
     ans->iterations = 0;
     ans->method = MK_METHOD_CLOSED_FORM;
     ans->state = MK_SOLVE_CONVERGED;
     switch (pth) {
-    case PATH_BOX_SPHERE: ans->hit = mk_closest_box_sphere(&p); return MK_OK;
-    case PATH_CAPSULE_SPHERE: ans->hit = mk_closest_capsule_sphere(&p); return MK_OK;
-    case PATH_CAPSULES: ans->hit = mk_closest_capsule_capsule(&p); return MK_OK;
+    case PATH_CAPSULE_SPHERE:
+        *ra = mk_mat3_identity();
+        ans->hit = mk_closest_capsule_sphere(a->u.capsule.half_height, mk_axis_of(xa.q), a->radius, c, b->radius);
+        return MK_OK;
+    case PATH_CAPSULES:
+        *ra = mk_mat3_identity();
+        ans->hit = mk_closest_capsule_capsule(a->u.capsule.half_height, mk_axis_of(xa.q), a->radius, c, mk_axis_of(xb.q),
+                                              b->u.capsule.half_height, b->radius);
+        return MK_OK;
+    case PATH_BOX_SPHERE:
+        *ra = mk_rotation_of(xa.q);
+        ans->hit = mk_closest_box_sphere(a->u.half_extents, a->radius, mk_mat3_tmul_v3(*ra, c), b->radius);
+        return MK_OK;
+    default: break;
+    }
+    *ra = mk_rotation_of(xa.q);
+    p = mk_pair_in(a, *ra, xa.p, b, xb);
+    switch (pth) {
     case PATH_PLANE: ans->hit = mk_closest_shape_plane(&p); return MK_OK;
     case PATH_GJK:
 #ifdef MK_WITHOUT_GJK
@@ -169,10 +244,12 @@ static void spheres(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_tr
     r->state = MK_SOLVE_CONVERGED;
 }
 
-static void to_world(const answer *ans, mk_transform x, int flip, mk_distance_result *r)
+/* b is rebuilt from a, so point_b = point_a + distance * normal holds in the
+ * world frame to one rounding, and one rotation is saved. */
+static void to_world(const answer *ans, mk_mat3 ra, mk_vec3 pa, int flip, mk_distance_result *r)
 {
-    mk_vec3 n = mk_quat_rotate(x.q, ans->hit.normal);
-    mk_vec3 a = mk_transform_point(x, ans->hit.a), b = mk_transform_point(x, ans->hit.b);
+    mk_vec3 n = mk_mat3_mul_v3(ra, ans->hit.normal), a = mk_v3_add(mk_mat3_mul_v3(ra, ans->hit.a), pa);
+    mk_vec3 b = mk_v3_mad(a, ans->hit.distance, n);
     r->distance = ans->hit.distance;
     r->normal = flip ? mk_v3_neg(n) : n;
     r->point_a = flip ? b : a;
@@ -185,27 +262,29 @@ static void to_world(const answer *ans, mk_transform x, int flip, mk_distance_re
 mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
                       mk_distance_result *out)
 {
-    mk_status st = check_inputs(a, &xa, b, &xb, out);
+    mk_status st = check_inputs(a, xa, b, xb, out);
     route rt;
     answer ans;
+    mk_mat3 ra;
     if (st != MK_OK) return st;
     rt = routes[a->type][b->type];
     if (rt.path == PATH_SPHERES) {
         spheres(a, xa, b, xb, out);
         return MK_OK;
     }
-    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ans);
+    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ra, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
     if (st != MK_OK) return st;
-    to_world(&ans, rt.swap ? xb : xa, rt.swap, out);
+    to_world(&ans, ra, rt.swap ? xb.p : xa.p, rt.swap, out);
     return MK_OK;
 }
 
 mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
                      int *overlapping)
 {
-    mk_status st = check_inputs(a, &xa, b, &xb, overlapping);
+    mk_status st = check_inputs(a, xa, b, xb, overlapping);
     route rt;
     answer ans;
+    mk_mat3 ra;
     if (st != MK_OK) return st;
     rt = routes[a->type][b->type];
     if (rt.path == PATH_SPHERES) {
@@ -216,15 +295,16 @@ mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     }
 #ifndef MK_WITHOUT_GJK
     if (rt.path == PATH_GJK) {
-        mk_pair p = mk_pair_make(a, xa, b, xb);
+        mk_pair p;
         mk_gjk_result g;
+        p = mk_pair_make(a, xa, b, xb);
         mk_gjk(&p, cache, 1, a->radius + b->radius, &g);
         if (cache) mk_gjk_cache_store(&g.s, g.normal, cache);
         *overlapping = g.overlap;
         return MK_OK;
     }
 #endif
-    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ans);
+    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ra, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
     if (st != MK_OK) return st;
     *overlapping = ans.hit.distance <= 0;
     return MK_OK;
@@ -267,7 +347,7 @@ static int nearest_vertex(const mk_shape *s, mk_vec3 q, int start)
 
 mk_status mk_approx_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_real *out)
 {
-    mk_status st = check_inputs(a, &xa, b, &xb, out);
+    mk_status st = check_inputs(a, xa, b, xb, out);
     mk_pair p;
     mk_vec3 va, vb;
     int ia = -1, ib;

@@ -2,189 +2,165 @@
 #include "gjk.h"
 
 /* ---- signed volumes (Montanari, Petrinic, Barbieri 2017) --------------------
- * Each solver gets the points of a (sub)simplex and returns the sub-simplex
- * whose relative interior holds the point nearest the origin, with its
- * barycentric weights. The origin's barycentric coordinates are ratios of
- * signed volumes (areas, lengths) taken in the best-conditioned projection;
- * a vertex whose coordinate has the wrong sign (or is zero) is dropped by
- * recursing on the opposite face. A degenerate simplex has no sign to agree
- * with, so every face gets tried: no division by a vanishing determinant. */
+ * Each solver gets a (sub)simplex of s (vertex indices ascending, the newest
+ * last) and returns the sub-simplex whose relative interior holds the point
+ * nearest the origin, with its barycentric weights. The origin's barycentric
+ * coordinates are ratios of signed volumes: for a triangle, the areas of the
+ * sub-triangles at the origin's projection p0 measured along the normal,
+ * n . ((s_j - p0) x (s_k - p0)), taken about p0 so their rounding scales with
+ * the triangle rather than with its distance from the origin. A vertex whose
+ * coordinate is not positive is dropped by recursing on the opposite face;
+ * a degenerate simplex has no positive coordinates, so every face gets tried:
+ * no division by a vanishing determinant, and a NaN (overflow) never counts as
+ * inside. */
 
 typedef struct sv_sol {
     int n;
-    int idx[4];
+    int idx[4];   /* ascending, so the simplex can be compacted in place */
     mk_real l[4];
-    mk_real vv; /* |v|^2 of this candidate */
+    mk_vec3 v;    /* the nearest point */
+    mk_real vv;   /* |v|^2 */
 } sv_sol;
 
-static int same_sign(mk_real a, mk_real b) { return (a > 0 && b > 0) || (a < 0 && b < 0); }
-
-static int max_abs_axis(mk_vec3 v)
-{
-    mk_real x = mk_fabs_(v.x), y = mk_fabs_(v.y), z = mk_fabs_(v.z);
-    return (x >= y && x >= z) ? 0 : (y >= z ? 1 : 2);
-}
-
-static mk_real axis(mk_vec3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
-
-static void sol_vertex(const mk_vec3 *w, int i, sv_sol *out)
+static void sol_vertex(const mk_cso_vertex *s, int i, sv_sol *out)
 {
     out->n = 1;
     out->idx[0] = i;
     out->l[0] = 1;
-    out->vv = mk_v3_len2(w[i]);
+    out->v = s[i].w;
+    out->vv = mk_v3_len2(s[i].w);
 }
 
-static void sol_finish(const mk_vec3 *w, sv_sol *s)
+/* Segment (i, j). */
+static void sv_1d(const mk_cso_vertex *s, int i, int j, sv_sol *out)
 {
-    mk_vec3 v = mk_v3_zero();
-    int k;
-    for (k = 0; k < s->n; ++k) v = mk_v3_mad(v, s->l[k], w[s->idx[k]]);
-    s->vv = mk_v3_len2(v);
-}
-
-/* Keeps the better of two candidates in *best. NaN distances never win. */
-static void sol_keep(sv_sol *best, const sv_sol *c)
-{
-    if (c->vv < best->vv || !(best->vv == best->vv)) *best = *c;
-}
-
-static void sv_1d(const mk_vec3 *w, int i1, int i2, sv_sol *out)
-{
-    mk_vec3 s1 = w[i1], s2 = w[i2], t = mk_v3_sub(s2, s1), p0;
-    mk_real tt = mk_v3_len2(t), mu, c1, c2;
-    int k;
-    if (!(tt > 0)) {
-        sol_vertex(w, i1, out);
-        return;
-    }
-    p0 = mk_v3_mad(s1, -mk_v3_dot(s1, t) / tt, t); /* the origin projected on the line */
-    k = max_abs_axis(t);
-    mu = axis(s1, k) - axis(s2, k);
-    c1 = axis(p0, k) - axis(s2, k);
-    c2 = axis(s1, k) - axis(p0, k);
-    if (!same_sign(mu, c2)) {
-        sol_vertex(w, i1, out);
-    } else if (!same_sign(mu, c1)) {
-        sol_vertex(w, i2, out);
+    mk_vec3 a = s[i].w, t = mk_v3_sub(s[j].w, a);
+    mk_real tt = mk_v3_len2(t), lb = -mk_v3_dot(a, t) / tt; /* weight of j */
+    if (!(lb < 1)) { /* also tt == 0 (NaN) */
+        sol_vertex(s, j, out);
+    } else if (!(lb > 0)) {
+        sol_vertex(s, i, out);
     } else {
         out->n = 2;
-        out->idx[0] = i1;
-        out->idx[1] = i2;
-        out->l[0] = c1 / mu;
-        out->l[1] = 1 - out->l[0];
-        sol_finish(w, out);
+        out->idx[0] = i;
+        out->idx[1] = j;
+        out->l[0] = 1 - lb;
+        out->l[1] = lb;
+        out->v = mk_v3_mad(a, lb, t);
+        out->vv = mk_v3_len2(out->v);
     }
 }
 
-/* Twice the signed area of (p, b, c) in the plane of axes (i, j). */
-static mk_real area2(mk_vec3 p, mk_vec3 b, mk_vec3 c, int i, int j)
+/* Triangle (i, j, k). */
+static void sv_2d(const mk_cso_vertex *s, int i, int j, int k, sv_sol *out)
 {
-    return (axis(b, i) - axis(p, i)) * (axis(c, j) - axis(p, j)) - (axis(b, j) - axis(p, j)) * (axis(c, i) - axis(p, i));
-}
-
-static void sv_2d(const mk_vec3 *w, int i1, int i2, int i3, sv_sol *out)
-{
-    const int ids[3] = {i1, i2, i3};
-    mk_vec3 s1 = w[i1], s2 = w[i2], s3 = w[i3];
-    mk_vec3 n = mk_v3_cross(mk_v3_sub(s2, s1), mk_v3_sub(s3, s1)), p0;
-    mk_real nn = mk_v3_len2(n), mu, c[3];
-    int k, i, j, m, inside = 1;
+    mk_vec3 a = s[i].w, b = s[j].w, c = s[k].w;
+    mk_vec3 n = mk_v3_cross(mk_v3_sub(b, a), mk_v3_sub(c, a));
+    mk_real nn = mk_v3_len2(n), ca = 0, cb = 0, cc = 0;
+    sv_sol e;
     if (nn > 0) {
-        p0 = mk_v3_scale(n, mk_v3_dot(s1, n) / nn); /* the origin projected on the plane */
-        /* Project along the normal's largest component; (i, j) cyclic after k so
-         * the projected area has the sign of n_k. */
-        k = max_abs_axis(n);
-        i = (k + 1) % 3;
-        j = (k + 2) % 3;
-        mu = axis(n, k);
-        c[0] = area2(p0, s2, s3, i, j);
-        c[1] = area2(p0, s3, s1, i, j);
-        c[2] = area2(p0, s1, s2, i, j);
-        for (m = 0; m < 3; ++m) inside = inside && same_sign(mu, c[m]);
-        if (inside) {
-            mk_real sum = c[0] + c[1] + c[2];
+        mk_vec3 p0 = mk_v3_scale(n, mk_v3_dot(a, n) / nn); /* the origin projected on the plane */
+        mk_vec3 ap = mk_v3_sub(a, p0), bp = mk_v3_sub(b, p0), cp = mk_v3_sub(c, p0);
+        ca = mk_v3_dot(n, mk_v3_cross(bp, cp));
+        cb = mk_v3_dot(n, mk_v3_cross(cp, ap));
+        cc = mk_v3_dot(n, mk_v3_cross(ap, bp));
+        if (ca > 0 && cb > 0 && cc > 0) {
+            mk_real sum = ca + cb + cc;
             out->n = 3;
-            for (m = 0; m < 3; ++m) {
-                out->idx[m] = ids[m];
-                out->l[m] = c[m] / sum;
-            }
-            sol_finish(w, out);
+            out->idx[0] = i;
+            out->idx[1] = j;
+            out->idx[2] = k;
+            out->l[0] = ca / sum;
+            out->l[1] = cb / sum;
+            out->l[2] = cc / sum;
+            out->v = p0;
+            out->vv = mk_v3_len2(p0);
             return;
         }
-    } else {
-        c[0] = c[1] = c[2] = 0;
-        mu = 0;
     }
-    /* Outside (or degenerate): the nearest point is on an edge whose opposite vertex has the wrong sign. */
+    /* Outside (or degenerate): the nearest point is on an edge whose opposite
+     * vertex has a non-positive coordinate (every edge, when degenerate). */
     out->n = 0;
     out->vv = (mk_real)HUGE_VAL;
-    for (m = 0; m < 3; ++m) {
-        sv_sol e;
-        if (same_sign(mu, c[m])) continue;
-        sv_1d(w, ids[(m + 1) % 3], ids[(m + 2) % 3], &e);
-        sol_keep(out, &e);
+    if (!(ca > 0)) sv_1d(s, j, k, out);
+    if (!(cb > 0)) {
+        sv_1d(s, i, k, &e);
+        if (e.vv < out->vv) *out = e;
     }
-    if (out->n == 0) sol_vertex(w, i1, out); /* only reached with NaN input */
+    if (!(cc > 0)) {
+        sv_1d(s, i, j, &e);
+        if (e.vv < out->vv) *out = e;
+    }
+    if (!(out->vv < (mk_real)HUGE_VAL)) sol_vertex(s, k, out); /* only reached with NaN input */
 }
 
-static void sv_3d(const mk_vec3 *w, sv_sol *out)
+static void sv_3d(const mk_cso_vertex *s, sv_sol *out)
 {
-    mk_vec3 s1 = w[0], s2 = w[1], s3 = w[2], s4 = w[3];
-    mk_real c[4], mu;
-    int m, inside = 1;
+    mk_vec3 w0 = s[0].w, w1 = s[1].w, w2 = s[2].w, w3 = s[3].w, x23 = mk_v3_cross(w2, w3);
     /* c[j]: signed volume of the tetrahedron with vertex j replaced by the origin. */
-    c[0] = mk_v3_dot(s2, mk_v3_cross(s3, s4));
-    c[1] = -mk_v3_dot(s1, mk_v3_cross(s3, s4));
-    c[2] = mk_v3_dot(s1, mk_v3_cross(s2, s4));
-    c[3] = -mk_v3_dot(s1, mk_v3_cross(s2, s3));
-    mu = c[0] + c[1] + c[2] + c[3];
-    for (m = 0; m < 4; ++m) inside = inside && same_sign(mu, c[m]);
-    if (inside) {
+    mk_real c0 = mk_v3_dot(w1, x23), c1 = -mk_v3_dot(w0, x23);
+    mk_real c2 = mk_v3_dot(w0, mk_v3_cross(w1, w3)), c3 = -mk_v3_dot(w0, mk_v3_cross(w1, w2));
+    mk_real mu = c0 + c1 + c2 + c3;
+    sv_sol f;
+    if (mu < 0) { /* orient so that inside means all positive */
+        c0 = -c0;
+        c1 = -c1;
+        c2 = -c2;
+        c3 = -c3;
+        mu = -mu;
+    }
+    if (c0 > 0 && c1 > 0 && c2 > 0 && c3 > 0) {
         out->n = 4;
-        for (m = 0; m < 4; ++m) {
-            out->idx[m] = m;
-            out->l[m] = c[m] / mu;
-        }
+        out->idx[0] = 0;
+        out->idx[1] = 1;
+        out->idx[2] = 2;
+        out->idx[3] = 3;
+        out->l[0] = c0 / mu;
+        out->l[1] = c1 / mu;
+        out->l[2] = c2 / mu;
+        out->l[3] = c3 / mu;
+        out->v = mk_v3_zero();
         out->vv = 0;
         return;
     }
     out->n = 0;
     out->vv = (mk_real)HUGE_VAL;
-    for (m = 0; m < 4; ++m) {
-        static const int face[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-        sv_sol f;
-        if (same_sign(mu, c[m])) continue;
-        sv_2d(w, face[m][0], face[m][1], face[m][2], &f);
-        sol_keep(out, &f);
+    if (!(c0 > 0)) sv_2d(s, 1, 2, 3, out);
+    if (!(c1 > 0)) {
+        sv_2d(s, 0, 2, 3, &f);
+        if (f.vv < out->vv) *out = f;
     }
-    if (out->n == 0) sol_vertex(w, 0, out);
+    if (!(c2 > 0)) {
+        sv_2d(s, 0, 1, 3, &f);
+        if (f.vv < out->vv) *out = f;
+    }
+    if (!(c3 > 0)) {
+        sv_2d(s, 0, 1, 2, &f);
+        if (f.vv < out->vv) *out = f;
+    }
+    if (!(out->vv < (mk_real)HUGE_VAL)) sol_vertex(s, 3, out);
 }
 
-/* Reduces s to the sub-simplex nearest the origin; returns v, the nearest point. */
-static mk_vec3 solve(mk_simplex *s)
+/* The sub-simplex of s nearest the origin; s is not touched, so a step that
+ * makes no progress costs no restore. */
+static void solve(const mk_simplex *s, sv_sol *sol)
 {
-    mk_vec3 w[4], v = mk_v3_zero();
-    mk_cso_vertex old[4];
-    sv_sol sol;
-    int k;
-    for (k = 0; k < s->n; ++k) {
-        w[k] = s->v[k].w;
-        old[k] = s->v[k];
-    }
     switch (s->n) {
-    case 1: sol_vertex(w, 0, &sol); break;
-    case 2: sv_1d(w, 0, 1, &sol); break;
-    case 3: sv_2d(w, 0, 1, 2, &sol); break;
-    default: sv_3d(w, &sol); break;
+    case 1: sol_vertex(s->v, 0, sol); break;
+    case 2: sv_1d(s->v, 0, 1, sol); break;
+    case 3: sv_2d(s->v, 0, 1, 2, sol); break;
+    default: sv_3d(s->v, sol); break;
     }
-    s->n = sol.n;
-    for (k = 0; k < sol.n; ++k) {
-        s->v[k] = old[sol.idx[k]];
-        s->l[k] = sol.l[k];
-        v = mk_v3_mad(v, sol.l[k], w[sol.idx[k]]);
+}
+
+static void commit(mk_simplex *s, const sv_sol *sol)
+{
+    int k;
+    for (k = 0; k < sol->n; ++k) {
+        if (sol->idx[k] != k) s->v[k] = s->v[sol->idx[k]];
+        s->l[k] = sol->l[k];
     }
-    return sol.n == 4 ? mk_v3_zero() : v;
+    s->n = sol->n;
 }
 
 /* Search direction towards the origin, perpendicular to the simplex by
@@ -246,58 +222,42 @@ static mk_vec3 initial_direction(const mk_pair *p, const mk_gjk_cache *c)
 
 void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real radius, mk_gjk_result *out)
 {
-    mk_simplex s, saved;
-    mk_vec3 v, v_saved, d;
-    mk_real vv, vv_prev = (mk_real)HUGE_VAL, scale2 = 0, lower = -(mk_real)HUGE_VAL;
-    int iter, k, ha = -1, hb = -1;
+    mk_simplex *s = &out->s;
+    sv_sol sol;
+    mk_real scale2 = 0, lower = -(mk_real)HUGE_VAL;
+    int iter, k, ha = -1, hb = -1, overlap = 0;
     mk_solve_state state = MK_SOLVE_MAX_ITERATIONS;
-    int overlap = 0;
 
     out->normal = mk_v3(1, 0, 0);
-    if (cache && warm_simplex(p, cache, &s) > 0) {
+    if (cache && warm_simplex(p, cache, s) > 0) {
         ha = cache->ia[0];
         hb = cache->ib[0];
     } else {
-        s.n = 1;
-        s.v[0] = mk_pair_support(p, initial_direction(p, cache), -1, -1);
-        ha = s.v[0].ia;
-        hb = s.v[0].ib;
+        s->n = 1;
+        s->v[0] = mk_pair_support(p, initial_direction(p, cache), -1, -1);
+        ha = s->v[0].ia;
+        hb = s->v[0].ib;
     }
-    for (k = 0; k < s.n; ++k) scale2 = mk_max(scale2, mk_v3_len2(s.v[k].w));
-    v = solve(&s);
-    vv = mk_v3_len2(v);
-    saved = s;
-    v_saved = v;
+    for (k = 0; k < s->n; ++k) scale2 = mk_max(scale2, mk_v3_len2(s->v[k].w));
+    solve(s, &sol);
+    commit(s, &sol);
 
     for (iter = 0; iter < MK_GJK_MAX_ITERATIONS; ++iter) {
         mk_cso_vertex w;
-        mk_real dn, lo, u, tol_abs;
-        if (s.n == 4) { /* the origin is inside the tetrahedron */
+        mk_vec3 d;
+        mk_real dn, lo, u, tol_abs = MK_GJK_ABS_TOL * mk_sqrt_(scale2);
+        if (s->n == 4 || sol.vv <= tol_abs * tol_abs) { /* origin inside, or on the simplex to rounding */
             overlap = 1;
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        tol_abs = MK_GJK_ABS_TOL * mk_sqrt_(scale2);
-        if (vv <= tol_abs * tol_abs) { /* the origin is on the simplex (touching), to rounding */
-            overlap = 1;
-            state = MK_SOLVE_CONVERGED;
-            break;
-        }
-        /* Strict decrease, written so a NaN also stops: otherwise keep the previous simplex. */
-        if (!(vv < vv_prev)) {
-            s = saved;
-            v = v_saved;
-            vv = vv_prev;
-            state = (vv == vv) ? MK_SOLVE_CONVERGED : MK_SOLVE_DEGENERATE;
-            break;
-        }
-        u = mk_sqrt_(vv);
+        u = mk_sqrt_(sol.vv);
         if (boolean && u <= radius) {
             overlap = 1;
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        d = direction(&s, v);
+        d = direction(s, sol.v);
         dn = mk_v3_len(d);
         if (!(dn > 0)) {
             state = MK_SOLVE_DEGENERATE;
@@ -317,22 +277,30 @@ void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real ra
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        if (repeated(&s, &w) || u - lower <= MK_GJK_REL_TOL * u + MK_GJK_ABS_TOL * mk_sqrt_(scale2)) {
+        if (repeated(s, &w) || u - lower <= MK_GJK_REL_TOL * u + MK_GJK_ABS_TOL * mk_sqrt_(scale2)) {
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        saved = s;
-        v_saved = v;
-        vv_prev = vv;
-        s.v[s.n++] = w;
-        v = solve(&s);
-        vv = mk_v3_len2(v);
+        /* Add w; keep the result only on a strict decrease (written so a NaN also stops). */
+        {
+            mk_real vv_prev = sol.vv;
+            mk_vec3 v_prev = sol.v;
+            s->v[s->n++] = w;
+            solve(s, &sol);
+            if (!(sol.vv < vv_prev)) {
+                s->n--;
+                sol.vv = vv_prev;
+                sol.v = v_prev;
+                state = vv_prev == vv_prev ? MK_SOLVE_CONVERGED : MK_SOLVE_DEGENERATE;
+                break;
+            }
+            commit(s, &sol);
+        }
     }
     /* Converged without an early answer: decide by the (tight) lower bound. */
     if (boolean && !overlap) overlap = !(lower > radius);
-    out->s = s;
-    out->v = v;
-    out->upper = overlap ? 0 : mk_sqrt_(vv);
+    out->v = sol.v;
+    out->upper = overlap ? 0 : mk_sqrt_(sol.vv);
     out->lower = lower;
     out->scale = mk_sqrt_(scale2);
     out->overlap = overlap;

@@ -66,19 +66,46 @@ typedef struct mk_gjk_result {
     mk_solve_state state;
 } mk_gjk_result;
 
-/* Rotation and translation of B in A's frame; quaternions must be unit. */
-static inline mk_pair mk_pair_make(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb)
+/* Rotation matrix of a quaternion that is unit only to within
+ * MK_QUAT_TOLERANCE: the usual formula with 2/|q|^2 in place of 2 is an exact
+ * rotation for any non-zero q, so no square root, no renormalised copy, and
+ * the one division overlaps the products instead of preceding them. */
+static inline mk_mat3 mk_rotation_of(mk_quat q)
+{
+    mk_real s = 2 / mk_quat_len2(q);
+    mk_real xs = q.x * s, ys = q.y * s, zs = q.z * s;
+    mk_real xx = q.x * xs, yy = q.y * ys, zz = q.z * zs, xy = q.x * ys, xz = q.x * zs, yz = q.y * zs;
+    mk_real wx = q.w * xs, wy = q.w * ys, wz = q.w * zs;
+    return mk_mat3_cols(mk_v3(1 - (yy + zz), xy + wz, xz - wy), mk_v3(xy - wz, 1 - (xx + zz), yz + wx),
+                        mk_v3(xz + wy, yz - wx, 1 - (xx + yy)));
+}
+
+/* The image of the local z axis (capsule, cylinder and cone axes): the
+ * third column of mk_rotation_of(q), without the other two. */
+static inline mk_vec3 mk_axis_of(mk_quat q)
+{
+    mk_real s = 2 / mk_quat_len2(q);
+    return mk_v3((q.x * q.z + q.w * q.y) * s, (q.y * q.z - q.w * q.x) * s, 1 - (q.x * q.x + q.y * q.y) * s);
+}
+
+/* B's pose in A's frame from A's world rotation ra (mk_rotation_of). */
+static inline mk_pair mk_pair_in(const mk_shape *a, mk_mat3 ra, mk_vec3 pa, const mk_shape *b, mk_transform xb)
 {
     mk_pair p;
     p.a = a;
     p.b = b;
-    p.r = mk_mat3_from_quat(mk_quat_mul(mk_quat_conj(xa.q), xb.q));
-    p.t = mk_quat_inv_rotate(xa.q, mk_v3_sub(xb.p, xa.p));
+    p.r = mk_mat3_tmul(ra, mk_rotation_of(xb.q));
+    p.t = mk_mat3_tmul_v3(ra, mk_v3_sub(xb.p, pa));
     return p;
 }
 
+static inline mk_pair mk_pair_make(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb)
+{
+    return mk_pair_in(a, mk_rotation_of(xa.q), xa.p, b, xb);
+}
+
 /* Support of A - B along d (A's frame). *ha, *hb: hints in, vertex indices out. */
-static inline mk_cso_vertex mk_pair_support(const mk_pair *p, mk_vec3 d, int ha, int hb)
+MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support(const mk_pair *p, mk_vec3 d, int ha, int hb)
 {
     mk_cso_vertex v;
     mk_vec3 bl;

@@ -14,6 +14,12 @@
  * side (planes, slabs) go to an oversized list and are candidates of every
  * proxy. A level stays in use until the next rebuild once it had a proxy.
  *
+ * Re-testing a candidate is skipped while it cannot have changed: each proxy
+ * sums how far its faces have moved (travel), and a tested pair stores the
+ * summed travel at which its closest gap (or thinnest overlap) could first
+ * close. That bound is exact, so the set stays exact; it makes a frame of
+ * slow motion cost a few loads per candidate instead of two AABB reads.
+ *
  * Cell coordinates are computed in double with exact power-of-two scaling;
  * the level is also kept coarse enough that |coordinate / cell| < 2^41, so
  * far-away specks cannot overflow a cell index. */
@@ -28,7 +34,15 @@
 #define MK_LEVEL_MAX_ 1100
 #define MK_LEVELS_ (MK_LEVEL_MAX_ - MK_LEVEL_MIN_ + 1)
 
-enum { REG_NONE = 0, REG_CELLS = 1, REG_OVERSIZED = 2 };
+/* Per-proxy state bits: how it is filed, and what this update did to it. */
+enum {
+    REG_NONE = 0, REG_CELLS = 1, REG_OVERSIZED = 2, REG_MASK = 3,
+    ST_REFILED = 4,   /* filing changed in this update: candidacy must be re-checked */
+    ST_DIRTY = 8,     /* moved, created or refiltered in this update */
+    ST_REFILTER = 16, /* filter words changed */
+    ST_GONE = 32,     /* unfiled in this update */
+    ST_SLOW = ST_REFILED | ST_REFILTER | ST_GONE /* its candidates need the full re-test */
+};
 
 typedef struct mk_cell {
     int64_t c[3];
@@ -46,10 +60,12 @@ struct mk_hgrid {
     /* per proxy slot */
     int32_t *level;
     mk_range *range;        /* native cell range */
-    uint8_t *reg;           /* REG_* */
-    uint8_t *refiled;       /* re-filed in this update: candidates must be re-checked */
+    uint8_t *st;            /* REG_* | ST_* */
     uint32_t *ov_pos;       /* index in oversized[] */
     uint32_t *todo; int todo_count; /* proxies to file in this update */
+    double *travel;         /* sum over updates of the largest move of any face */
+    double *refile_at;      /* travel at which a face may first reach a cell wall */
+    int updates;            /* since travel was last reset to 0 */
     uint32_t *oversized; int ov_count;
     /* levels */
     int32_t natives[MK_LEVELS_]; /* natives per level */
@@ -64,13 +80,23 @@ struct mk_hgrid {
 
 /* ---- levels and ranges ---- */
 
+/* Exponent arithmetic on the bits of a double: these run for every moved
+ * proxy every update, where frexp/ilogb/ldexp/floor calls into libm cost
+ * more than the rest of the bookkeeping. */
+static int exponent_of(double x) /* ilogb for normal x > 0 */
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return (int)((u >> 52) & 0x7ff) - 1023;
+}
+
 static int level_of_size(double size)
 {
-    int e;
-    double m;
-    if (!(size > 0)) return MK_LEVEL_MIN_;
-    m = frexp(size, &e);       /* size = m 2^e, m in [0.5, 1) */
-    return m == 0.5 ? e - 1 : e; /* smallest L with 2^L >= size */
+    uint64_t u;
+    if (!(size >= 0x1p-100)) return MK_LEVEL_MIN_;
+    memcpy(&u, &size, sizeof u);
+    /* smallest L with 2^L >= size: the exponent, plus one unless size is a power of two */
+    return exponent_of(size) + ((u & 0xfffffffffffffull) != 0);
 }
 
 static int is_oversized(const mk_aabb *b)
@@ -82,33 +108,133 @@ static int is_oversized(const mk_aabb *b)
     return 0;
 }
 
-static int level_of(const mk_aabb *b)
+/* The two lower bounds on a proxy's level: its size (cells at least as big
+ * as the box) and its distance from the origin (cell indices below 2^41). */
+static void level_bounds(const mk_aabb *b, int *by_size, int *by_coord)
 {
     const mk_real *lo = &b->lo.x, *hi = &b->hi.x;
     double size = 0, far = 0;
-    int k, l, lc;
+    int k;
     for (k = 0; k < 3; ++k) {
-        double s = (double)hi[k] - (double)lo[k];
+        double s = (double)hi[k] - (double)lo[k], a = fabs((double)lo[k]), c = fabs((double)hi[k]);
         if (s > size) size = s;
-        if (fabs((double)lo[k]) > far) far = fabs((double)lo[k]);
-        if (fabs((double)hi[k]) > far) far = fabs((double)hi[k]);
+        if (a > far) far = a;
+        if (c > far) far = c;
     }
-    l = level_of_size(size);
-    lc = far > 0 ? ilogb(far) - 40 : MK_LEVEL_MIN_; /* keeps |coordinate / cell| < 2^41 */
-    if (lc > l) l = lc;
-    if (l < MK_LEVEL_MIN_) l = MK_LEVEL_MIN_;
-    return l;
+    /* A box one ulp over a power of two still counts as that power: unit
+     * cubes should share one level, not split between two by rounding. */
+    *by_size = level_of_size(size * (1 - 0x1p-30));
+    *by_coord = far >= 0x1p-60 ? exponent_of(far) - 40 : MK_LEVEL_MIN_;
 }
 
-static int64_t cell_coord(mk_real v, int level) { return (int64_t)floor(ldexp((double)v, -level)); }
+static int level_of(const mk_aabb *b)
+{
+    int l, lc;
+    level_bounds(b, &l, &lc);
+    return lc > l ? lc : l;
+}
+
+/* A filed proxy keeps its level while its size stays within a factor of two
+ * of the ideal: rounding makes a unit cube measure 1 - ulp or 1 + ulp from
+ * frame to frame, and every level change re-files all its cells. Any level
+ * is correct (cell ranges come from the boxes); the choice only sets cost. */
+static int keeps_level(const mk_aabb *b, int own)
+{
+    int l, lc;
+    level_bounds(b, &l, &lc);
+    return lc <= own && l >= own - 1 && l <= own + 1;
+}
+
+/* 2^-level, exact: the scaling in cell_coord is then an exact product. */
+static double inv_cell(int level)
+{
+    uint64_t u = (uint64_t)(1023 - level) << 52;
+    double d;
+    memcpy(&d, &u, sizeof d);
+    return d;
+}
+
+/* floor(v * inv) for |v * inv| < 2^41 (guaranteed by level_of). */
+static int64_t cell_coord(mk_real v, double inv)
+{
+    double x = (double)v * inv;
+    int64_t i = (int64_t)x;
+    return i - (x < (double)i);
+}
+
+/* The cells of box b grown by `margin` cells on every side. Re-filings of
+ * slow boxes use 1/16 (fat_range), so a box jittering across a cell wall is
+ * not re-filed every frame; any superset of the box's own cells is correct.
+ * Returns 0 when a coordinate is infinite or beyond the 2^41 index bound:
+ * the proxy then needs a new level or the oversized list. */
+static int range_with_margin(const mk_aabb *b, int level, double margin, mk_range *r)
+{
+    double inv = inv_cell(level);
+    int k;
+    for (k = 0; k < 3; ++k) {
+        double lo = (double)(&b->lo.x)[k] * inv - margin, hi = (double)(&b->hi.x)[k] * inv + margin;
+        int64_t i;
+        if (!(lo > -0x1p41 && hi < 0x1p41)) return 0;
+        i = (int64_t)lo; r->lo[k] = i - (lo < (double)i);
+        i = (int64_t)hi; r->hi[k] = i - (hi < (double)i);
+    }
+    return 1;
+}
+
+static int fat_range(const mk_aabb *b, int level, mk_range *r) { return range_with_margin(b, level, 0.0625, r); }
+static int range_fits(const mk_aabb *b, int level, mk_range *r) { return range_with_margin(b, level, 0, r); }
 
 static void range_at(const mk_aabb *b, int level, mk_range *r)
 {
+    double inv = inv_cell(level);
     int k;
     for (k = 0; k < 3; ++k) {
-        r->lo[k] = cell_coord((&b->lo.x)[k], level);
-        r->hi[k] = cell_coord((&b->hi.x)[k], level);
+        r->lo[k] = cell_coord((&b->lo.x)[k], inv);
+        r->hi[k] = cell_coord((&b->hi.x)[k], inv);
     }
+}
+
+/* floor(x / 2^d), portable for negative x. */
+static int64_t floor_shift(int64_t x, int d)
+{
+    if (d >= 62) return x < 0 ? -1 : 0;
+    return x >= 0 ? x >> d : -((-(x + 1)) >> d) - 1;
+}
+
+/* A proxy's cells on a coarser level are its native cells scaled down: its
+ * guest filing is a function of the native range alone, so filing and
+ * unfiling can never disagree. */
+static void coarser(const mk_range *native, int d, mk_range *out)
+{
+    int k;
+    for (k = 0; k < 3; ++k) {
+        out->lo[k] = floor_shift(native->lo[k], d);
+        out->hi[k] = floor_shift(native->hi[k], d);
+    }
+}
+
+/* How far box b's faces may move before leaving r, the cells it is filed in
+ * at level (negative once they have left). */
+static double wall_room(const mk_aabb *b, const mk_range *r, int level)
+{
+    double c = 1 / inv_cell(level), room = HUGE_VAL;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        /* inside means wall_lo <= lo and hi < wall_hi: a face on the upper
+         * wall is already in the next cell */
+        double d0 = (double)(&b->lo.x)[k] - (double)r->lo[k] * c, d1 = (double)(r->hi[k] + 1) * c - (double)(&b->hi.x)[k];
+        if (!(d0 >= 0 && d1 > 0)) return -1; /* NaN (infinite sides) too */
+        if (d0 < room) room = d0;
+        if (d1 < room) room = d1;
+    }
+    return room;
+}
+
+/* The travel at which a proxy with that much room must be looked at again;
+ * shrunk like the wakes, so rounding can only make it come early. */
+static double room_until(double travel, double room)
+{
+    return travel + room * (1 - 0x1p-20) - travel * 0x1p-36;
 }
 
 static int range_eq(const mk_range *a, const mk_range *b) { return memcmp(a, b, sizeof *a) == 0; }
@@ -285,18 +411,25 @@ static void candidate(mk_bp *bp, struct mk_hgrid *g, uint32_t a, uint32_t b)
     }
 }
 
-/* Files `who` into every cell of r at `level`; meets the proxies there:
- * all of them on its own level, only natives on coarser levels (guests
- * there are finer than their natives and meet `slot` on their own level). */
-static void file_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, int guest)
+static int in_range(const mk_range *r, const int64_t *c)
+{
+    return r && c[0] >= r->lo[0] && c[0] <= r->hi[0] && c[1] >= r->lo[1] && c[1] <= r->hi[1] && c[2] >= r->lo[2] && c[2] <= r->hi[2];
+}
+
+/* Files `slot` into every cell of r at `level` outside `skip` (the cells it
+ * is already in), and meets the proxies there: all of them on its own level,
+ * only natives on coarser levels (guests there are finer than their natives
+ * and meet `slot` on their own level). */
+static void file_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, const mk_range *skip, int guest)
 {
     int64_t c[3];
     for (c[0] = r->lo[0]; c[0] <= r->hi[0]; ++c[0])
         for (c[1] = r->lo[1]; c[1] <= r->hi[1]; ++c[1])
             for (c[2] = r->lo[2]; c[2] <= r->hi[2]; ++c[2]) {
-                mk_cell *cell = cell_get(bp, g, level, c);
+                mk_cell *cell;
                 uint32_t e;
-                if (!cell) return;
+                if (in_range(skip, c)) continue;
+                if (!(cell = cell_get(bp, g, level, c))) return;
                 for (e = cell->head; e != MK_NONE_; e = g->ent[e].next) {
                     uint32_t who = g->ent[e].who;
                     if (!guest || !(who & MK_GUEST_)) candidate(bp, g, slot, who & ~MK_GUEST_);
@@ -306,12 +439,23 @@ static void file_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, 
             }
 }
 
-static void unfile_range(struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, int guest)
+/* Takes `slot` out of every cell of r at `level` outside `keep`. */
+static void unfile_range(struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, const mk_range *keep, int guest)
 {
     int64_t c[3];
     for (c[0] = r->lo[0]; c[0] <= r->hi[0]; ++c[0])
         for (c[1] = r->lo[1]; c[1] <= r->hi[1]; ++c[1])
-            for (c[2] = r->lo[2]; c[2] <= r->hi[2]; ++c[2]) cell_remove(g, level, c, slot | (guest ? MK_GUEST_ : 0));
+            for (c[2] = r->lo[2]; c[2] <= r->hi[2]; ++c[2])
+                if (!in_range(keep, c)) cell_remove(g, level, c, slot | (guest ? MK_GUEST_ : 0));
+}
+
+/* Moves slot's filing on one level from range o to range n, touching only
+ * the cells that differ. */
+static void refile_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, const mk_range *o, const mk_range *n, int guest)
+{
+    unfile_range(g, slot, level, o, n, guest);
+    file_range(bp, g, slot, level, n, o, guest);
+    g->st[slot] |= ST_REFILED;
 }
 
 static void ov_add(struct mk_hgrid *g, uint32_t slot)
@@ -327,23 +471,23 @@ static void ov_remove(struct mk_hgrid *g, uint32_t slot)
     g->ov_pos[last] = p;
 }
 
-/* Removes slot from every cell it is filed in, as filed from box b. */
-static void unfile(struct mk_hgrid *g, uint32_t slot, const mk_aabb *b)
+/* Removes slot from every cell it is filed in. */
+static void unfile(struct mk_hgrid *g, uint32_t slot)
 {
     int i;
-    if (g->reg[slot] == REG_OVERSIZED) ov_remove(g, slot);
-    if (g->reg[slot] == REG_CELLS) {
+    if ((g->st[slot] & REG_MASK) == REG_OVERSIZED) ov_remove(g, slot);
+    if ((g->st[slot] & REG_MASK) == REG_CELLS) {
         int own = g->level[slot];
-        unfile_range(g, slot, own, &g->range[slot], 0);
+        unfile_range(g, slot, own, &g->range[slot], NULL, 0);
         for (i = 0; i < g->used_count; ++i) {
             mk_range r;
             if (g->used_list[i] <= own) continue;
-            range_at(b, g->used_list[i], &r);
-            unfile_range(g, slot, g->used_list[i], &r, 1);
+            coarser(&g->range[slot], g->used_list[i] - own, &r);
+            unfile_range(g, slot, g->used_list[i], &r, NULL, 1);
         }
         g->natives[own - MK_LEVEL_MIN_]--;
     }
-    g->reg[slot] = REG_NONE;
+    g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | ST_GONE);
 }
 
 /* A level comes into use: every finer proxy already filed becomes its guest. */
@@ -353,9 +497,9 @@ static void open_level(mk_bp *bp, struct mk_hgrid *g, int level)
     use_level_list(g, level);
     for (s = 0; s < (uint32_t)bp->hi_slot && g->fail == MK_OK; ++s) {
         mk_range r;
-        if (g->reg[s] != REG_CELLS || g->level[s] >= level) continue;
-        range_at(&bp->box[s], level, &r);
-        file_range(bp, g, s, level, &r, 1);
+        if ((g->st[s] & REG_MASK) != REG_CELLS || g->level[s] >= level) continue;
+        coarser(&g->range[s], level - g->level[s], &r);
+        file_range(bp, g, s, level, &r, NULL, 1);
     }
 }
 
@@ -364,12 +508,13 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
     const mk_aabb *b = &bp->box[slot];
     int i, own;
     uint32_t s;
-    g->refiled[slot] = 1;
+    g->st[slot] |= ST_REFILED;
     if (is_oversized(b)) {
         /* Everything is its candidate, filed or oversized. */
         for (s = 0; s < (uint32_t)bp->hi_slot; ++s)
-            if (g->reg[s] != REG_NONE) candidate(bp, g, slot, s);
-        g->reg[slot] = REG_OVERSIZED;
+            if (g->st[s] & REG_MASK) candidate(bp, g, slot, s);
+        g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | REG_OVERSIZED);
+        g->refile_at[slot] = 0;
         ov_add(g, slot);
         return;
     }
@@ -377,56 +522,103 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
     if (!g->used[own - MK_LEVEL_MIN_]) open_level(bp, g, own);
     g->level[slot] = own;
     g->natives[own - MK_LEVEL_MIN_]++;
-    g->reg[slot] = REG_CELLS;
-    range_at(b, own, &g->range[slot]);
-    file_range(bp, g, slot, own, &g->range[slot], 0);
+    g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | REG_CELLS);
+    range_at(b, own, &g->range[slot]); /* first filing: tight; re-filings add the margin */
+    g->refile_at[slot] = room_until(g->travel[slot], wall_room(b, &g->range[slot], own));
+    file_range(bp, g, slot, own, &g->range[slot], NULL, 0);
     for (i = 0; i < g->used_count; ++i) {
         mk_range r;
         if (g->used_list[i] <= own) continue;
-        range_at(b, g->used_list[i], &r);
-        file_range(bp, g, slot, g->used_list[i], &r, 1);
+        coarser(&g->range[slot], g->used_list[i] - own, &r);
+        file_range(bp, g, slot, g->used_list[i], &r, NULL, 1);
     }
     for (i = 0; i < g->ov_count; ++i) candidate(bp, g, slot, g->oversized[i]);
 }
 
-/* Would slot be filed differently with box nb than it is with box ob? */
-static int filing_changes(const struct mk_hgrid *g, uint32_t slot, const mk_aabb *ob, const mk_aabb *nb)
+/* A moved proxy that keeps its level is re-filed in place, cell by cell;
+ * returns 0 when it must be unfiled and filed again (new level, oversized). */
+static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const mk_aabb *nb, double moved)
 {
-    int own, i;
-    mk_range r, o;
-    if (g->reg[slot] == REG_OVERSIZED || is_oversized(nb)) return 1;
-    own = level_of(nb);
-    if (own != g->level[slot]) return 1;
-    range_at(nb, own, &r);
-    if (!range_eq(&r, &g->range[slot])) return 1;
+    int own = g->level[slot], i;
+    mk_range r, o, old = g->range[slot];
+    double room;
+    if ((g->st[slot] & REG_MASK) == REG_OVERSIZED && is_oversized(nb)) return 1; /* still everyone's candidate */
+    if ((g->st[slot] & REG_MASK) != REG_CELLS) return 0;
+    room = wall_room(nb, &old, own);
+    if (room >= 0) { g->refile_at[slot] = room_until(g->travel[slot], room); return 1; }
+    /* Left its cells. The level is only reconsidered now: while the box
+     * stays within them its size cannot be far off. */
+    if (!keeps_level(nb, own)) return 0;
+    /* The margin pays for slow or jittering boxes; a box moving more than
+     * the margin per update would leave it anyway, and gets its bare cells. */
+    if (moved * inv_cell(own) < 0.0625) { if (!fat_range(nb, own, &r)) return 0; }
+    else if (!range_fits(nb, own, &r)) return 0;
+    g->refile_at[slot] = room_until(g->travel[slot], wall_room(nb, &r, own));
+    refile_range(bp, g, slot, own, &old, &r, 0);
+    g->range[slot] = r;
+    /* Cell walls of coarser levels are walls of this one too. */
     for (i = g->used_count - 1; i >= 0 && g->used_list[i] > own; --i) {
-        range_at(nb, g->used_list[i], &r);
-        range_at(ob, g->used_list[i], &o);
-        if (!range_eq(&r, &o)) return 1;
+        mk_range n;
+        coarser(&r, g->used_list[i] - own, &n);
+        coarser(&old, g->used_list[i] - own, &o);
+        if (!range_eq(&n, &o)) refile_range(bp, g, slot, g->used_list[i], &o, &n, 1);
     }
-    return 0;
+    return 1;
 }
 
 /* ---- the per-update re-test of candidates ---- */
 
 /* Do a and b (both filed) still share a cell? */
-static int still_candidates(const mk_bp *bp, const struct mk_hgrid *g, uint32_t a, uint32_t b)
+static int still_candidates(const struct mk_hgrid *g, uint32_t a, uint32_t b)
 {
     mk_range r;
-    if (g->reg[a] == REG_OVERSIZED || g->reg[b] == REG_OVERSIZED) return 1;
+    if ((g->st[a] | g->st[b]) & REG_OVERSIZED) return 1;
     if (g->level[a] == g->level[b]) return ranges_meet(&g->range[a], &g->range[b]);
-    if (g->level[a] < g->level[b]) { range_at(&bp->box[a], g->level[b], &r); return ranges_meet(&r, &g->range[b]); }
-    range_at(&bp->box[b], g->level[a], &r);
+    if (g->level[a] < g->level[b]) { coarser(&g->range[a], g->level[b] - g->level[a], &r); return ranges_meet(&r, &g->range[b]); }
+    coarser(&g->range[b], g->level[a] - g->level[b], &r);
     return ranges_meet(&r, &g->range[a]);
 }
 
-static uint32_t next_state(const mk_bp *bp, const struct mk_hgrid *g, uint32_t a, uint32_t b, uint32_t s)
+/* How far apart (> 0) or how deep in each other (>= 0) two boxes are: the
+ * largest gap over the axes, or the thinnest overlap. Either can change by
+ * at most the two boxes' travel. */
+static double margin(const mk_aabb *a, const mk_aabb *b, int overlapping)
+{
+    const mk_real *al = &a->lo.x, *ah = &a->hi.x, *bl = &b->lo.x, *bh = &b->hi.x;
+    double m = overlapping ? HUGE_VAL : 0;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        double x = (double)bl[k] - (double)ah[k], y = (double)al[k] - (double)bh[k];
+        if (overlapping) { if (-x < m) m = -x; if (-y < m) m = -y; }
+        else { if (x > m) m = x; if (y > m) m = y; }
+    }
+    return m;
+}
+
+/* The travel sum at which the pair must be tested again, rounded down to a
+ * float: slightly early is safe, late is not. The shrink factors cover the
+ * rounding of the gap and of the travel sums. */
+static float wake_at(double sum, double m)
+{
+    double w = sum + m * (1 - 0x1p-20) - sum * 0x1p-36;
+    if (!(w > 0)) return 0;
+    if (w > 3e38) return 3e38f;
+    return (float)(w * (1 - 0x1p-22));
+}
+
+static uint32_t next_state(const mk_bp *bp, const struct mk_hgrid *g, uint32_t a, uint32_t b, mk_pair_entry *e)
 {
     const uint32_t pair_bits = MK_PS_CAND | MK_PS_LIVE | MK_PS_REJECTED;
-    if (g->reg[a] == REG_NONE || g->reg[b] == REG_NONE || !(s & MK_PS_CAND)) return s & ~pair_bits;
-    if ((g->refiled[a] || g->refiled[b]) && !still_candidates(bp, g, a, b)) return s & ~pair_bits;
-    if ((bp->flags[a] | bp->flags[b]) & MK_PF_REFILTER) s &= ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
-    if (!mk_bp_overlap_(&bp->box[a], &bp->box[b])) return s & ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
+    uint32_t s = e->state;
+    uint8_t sa = g->st[a], sb = g->st[b];
+    int overlap;
+    if (!(sa & REG_MASK) || !(sb & REG_MASK) || !(s & MK_PS_CAND)) return s & ~pair_bits;
+    if (((sa | sb) & ST_REFILED) && !still_candidates(g, a, b)) return s & ~pair_bits;
+    if ((sa | sb) & ST_REFILTER) s &= ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
+    else if (g->travel[a] + g->travel[b] < (double)e->wake) return s;
+    overlap = mk_bp_overlap_(&bp->box[a], &bp->box[b]);
+    e->wake = wake_at(g->travel[a] + g->travel[b], margin(&bp->box[a], &bp->box[b], overlap));
+    if (!overlap) return s & ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
     if (s & (MK_PS_LIVE | MK_PS_REJECTED)) return s;
     return s | (mk_bp_filter_pass_(bp, a, b) ? MK_PS_LIVE : MK_PS_REJECTED);
 }
@@ -437,12 +629,43 @@ static void retest(mk_bp *bp, struct mk_hgrid *g, int all)
     int i;
     for (i = 0; i < t->count; ++i) {
         mk_pair_entry *e = &t->e[i];
-        uint32_t a = (uint32_t)(e->key >> 32), b = (uint32_t)e->key, s;
-        if (!all && !((bp->flags[a] | bp->flags[b]) & MK_PF_DIRTY)) continue;
-        s = next_state(bp, g, a, b, e->state);
-        if ((s ^ e->state) & (MK_PS_LIVE | MK_PS_CAND)) { e->state = s; mk_pairs_touch_(bp, e); }
-        else e->state = s;
+        uint32_t a = (uint32_t)(e->key >> 32), b = (uint32_t)e->key, s, old = e->state;
+        uint8_t sa = g->st[a], sb = g->st[b];
+        if (!all && !((sa | sb) & ST_DIRTY)) continue;
+        /* the common case: both filed as before, too little travel to matter
+         * (every entry here has CAND: the grid sets it on insertion) */
+        if (!((sa | sb) & ST_SLOW) && g->travel[a] + g->travel[b] < (double)e->wake) continue;
+        s = next_state(bp, g, a, b, e);
+        e->state = s;
+        if ((s ^ old) & (MK_PS_LIVE | MK_PS_CAND)) mk_pairs_touch_(bp, e);
     }
+}
+
+/* Every 256 updates travel restarts from 0, with every wake, so the sums
+ * stay small enough for the float wakes to keep their precision. */
+static void restart_travel(mk_bp *bp, struct mk_hgrid *g)
+{
+    int i;
+    if (++g->updates < 256) return;
+    g->updates = 0;
+    memset(g->travel, 0, sizeof(double) * (size_t)bp->hi_slot);
+    memset(g->refile_at, 0, sizeof(double) * (size_t)bp->hi_slot);
+    for (i = 0; i < bp->pairs.count; ++i) bp->pairs.e[i].wake = 0;
+}
+
+/* The largest move of any face from box o to box n (infinite when a side is). */
+static double face_travel(const mk_aabb *o, const mk_aabb *n)
+{
+    const mk_real *ol = &o->lo.x, *oh = &o->hi.x, *nl = &n->lo.x, *nh = &n->hi.x;
+    double d = 0;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        double dl = fabs((double)nl[k] - (double)ol[k]), dh = fabs((double)nh[k] - (double)oh[k]);
+        if (!(dl <= 1e300 && dh <= 1e300)) return HUGE_VAL; /* inf - inf: test always */
+        if (dl > d) d = dl;
+        if (dh > d) d = dh;
+    }
+    return d;
 }
 
 /* ---- lifetime ---- */
@@ -453,11 +676,12 @@ static int grid_arrays(struct mk_hgrid *g, grid_array_ *a)
     int n = 0;
     a[n].p = (void **)&g->level; a[n++].elem = sizeof *g->level;
     a[n].p = (void **)&g->range; a[n++].elem = sizeof *g->range;
-    a[n].p = (void **)&g->reg; a[n++].elem = sizeof *g->reg;
-    a[n].p = (void **)&g->refiled; a[n++].elem = sizeof *g->refiled;
+    a[n].p = (void **)&g->st; a[n++].elem = sizeof *g->st;
     a[n].p = (void **)&g->ov_pos; a[n++].elem = sizeof *g->ov_pos;
     a[n].p = (void **)&g->todo; a[n++].elem = sizeof *g->todo;
     a[n].p = (void **)&g->oversized; a[n++].elem = sizeof *g->oversized;
+    a[n].p = (void **)&g->travel; a[n++].elem = sizeof *g->travel;
+    a[n].p = (void **)&g->refile_at; a[n++].elem = sizeof *g->refile_at;
     return n;
 }
 
@@ -469,7 +693,7 @@ static void reset_cells(struct mk_hgrid *g, int proxies)
     for (i = 0; i < g->ent_cap; ++i) g->ent[i].next = i + 1 < g->ent_cap ? (uint32_t)i + 1 : MK_NONE_;
     g->ent_free = 0;
     g->ent_used = 0;
-    memset(g->reg, 0, (size_t)proxies);
+    memset(g->st, 0, (size_t)proxies);
     memset(g->natives, 0, sizeof g->natives);
     memset(g->used, 0, sizeof g->used);
     g->used_count = 0;
@@ -479,7 +703,7 @@ static void reset_cells(struct mk_hgrid *g, int proxies)
 mk_status mk_hgrid_create_(mk_bp *bp)
 {
     struct mk_hgrid *g;
-    grid_array_ a[7];
+    grid_array_ a[8];
     int n, i;
     if (!(g = (struct mk_hgrid *)mk_bp_alloc_(bp, sizeof *g))) return MK_ERR_OUT_OF_MEMORY;
     memset(g, 0, sizeof *g);
@@ -487,17 +711,19 @@ mk_status mk_hgrid_create_(mk_bp *bp)
     n = grid_arrays(g, a);
     for (i = 0; i < n; ++i)
         if (!(*a[i].p = mk_bp_alloc_(bp, a[i].elem * (size_t)bp->cap))) goto fail;
-    /* A proxy covers at most 8 cells of its own level, plus a guest cell or
-     * two per coarser level. Growing pools start at the typical need; fixed
-     * ones get room for 8 cells and 16 filings per proxy. */
-    g->cell_cap = (bp->def.fixed_capacity ? 8 : 2) * bp->cap + 64;
-    g->ent_cap = (bp->def.fixed_capacity ? 16 : 4) * bp->cap + 64;
+    /* A proxy covers 8 cells of its own level at most, 27 once re-filed with
+     * a margin, plus a guest cell or two per coarser level. Growing pools
+     * start at the typical need; fixed ones get room for 27 cells and 32
+     * filings per proxy, which a wide spread of sizes can still exceed. */
+    g->cell_cap = (bp->def.fixed_capacity ? 27 : 2) * bp->cap + 64;
+    g->ent_cap = (bp->def.fixed_capacity ? 32 : 4) * bp->cap + 64;
     g->index_mask = 1;
     while (g->index_mask + 1 < (uint32_t)g->cell_cap * 2) g->index_mask = g->index_mask * 2 + 1;
     if (!(g->cells = (mk_cell *)mk_bp_alloc_(bp, sizeof(mk_cell) * (size_t)g->cell_cap))) goto fail;
     if (!(g->ent = (mk_centry *)mk_bp_alloc_(bp, sizeof(mk_centry) * (size_t)g->ent_cap))) goto fail;
     if (!(g->index = (uint32_t *)mk_bp_alloc_(bp, sizeof(uint32_t) * (size_t)(g->index_mask + 1)))) goto fail;
-    memset(g->refiled, 0, (size_t)bp->cap);
+    memset(g->travel, 0, sizeof(double) * (size_t)bp->cap);
+    memset(g->refile_at, 0, sizeof(double) * (size_t)bp->cap);
     reset_cells(g, bp->cap);
     return MK_OK;
 fail:
@@ -508,7 +734,7 @@ fail:
 void mk_hgrid_destroy_(mk_bp *bp)
 {
     struct mk_hgrid *g = bp->grid;
-    grid_array_ a[7];
+    grid_array_ a[8];
     int n, i;
     if (!g) return;
     n = grid_arrays(g, a);
@@ -550,6 +776,29 @@ static void rebuild(mk_bp *bp, struct mk_hgrid *g)
         if (in_structure(bp, s)) file(bp, g, s);
 }
 
+/* One pass over the changed proxies, with the old boxes still in place:
+ * mark them, add up their travel, re-file what crossed a cell wall. */
+static void take_changes(mk_bp *bp, struct mk_hgrid *g)
+{
+    int i;
+    for (i = 0; i < bp->dirty_count; ++i) {
+        uint32_t s = bp->dirty[i];
+        uint8_t f = bp->flags[s];
+        double moved;
+        g->st[s] |= (uint8_t)(ST_DIRTY | ((f & MK_PF_REFILTER) ? ST_REFILTER : 0));
+        if (f & MK_PF_DYING) { unfile(g, s); continue; }
+        if (f & MK_PF_NEW) { g->todo[g->todo_count++] = s; continue; }
+        if (!(f & MK_PF_MOVED)) continue;
+        moved = face_travel(&bp->box[s], &bp->next[s]);
+        g->travel[s] += moved;
+        if (g->travel[s] < g->refile_at[s]) continue; /* no face can have reached a wall */
+        if (!refile_in_place(bp, g, s, &bp->next[s], moved)) {
+            unfile(g, s);
+            g->todo[g->todo_count++] = s;
+        }
+    }
+}
+
 mk_status mk_hgrid_update_(mk_bp *bp)
 {
     struct mk_hgrid *g;
@@ -562,23 +811,17 @@ mk_status mk_hgrid_update_(mk_bp *bp)
     if (all) {
         rebuild(bp, g);
     } else {
-        /* Unfile what changes, with the old boxes; then commit; then file. */
-        for (i = 0; i < bp->dirty_count; ++i) {
-            uint32_t s = bp->dirty[i];
-            uint8_t f = bp->flags[s];
-            if (f & MK_PF_DYING) { unfile(g, s, &bp->box[s]); continue; }
-            if (f & MK_PF_NEW) { g->todo[g->todo_count++] = s; continue; }
-            if ((f & MK_PF_MOVED) && filing_changes(g, s, &bp->box[s], &bp->next[s])) {
-                unfile(g, s, &bp->box[s]);
-                g->todo[g->todo_count++] = s;
-            }
-        }
+        restart_travel(bp, g);
+        take_changes(bp, g);
         mk_bp_commit_(bp);
         for (i = 0; i < g->todo_count && g->fail == MK_OK; ++i) file(bp, g, g->todo[i]);
     }
     if (g->fail == MK_OK) retest(bp, g, all);
-    if (all) memset(g->refiled, 0, (size_t)bp->hi_slot);
-    else for (i = 0; i < g->todo_count; ++i) g->refiled[g->todo[i]] = 0;
+    if (all) {
+        for (i = 0; i < bp->hi_slot; ++i) g->st[i] &= REG_MASK;
+    } else {
+        for (i = 0; i < bp->dirty_count; ++i) g->st[bp->dirty[i]] &= REG_MASK;
+    }
     if (g->fail != MK_OK) return g->fail;
     bp->rebuild = 0;
     return MK_OK;
@@ -590,7 +833,7 @@ static void linear_query(const mk_bp *bp, const struct mk_hgrid *g, mk_aabb q, m
 {
     uint32_t s;
     for (s = 0; s < (uint32_t)bp->hi_slot; ++s)
-        if (g->reg[s] != REG_NONE && mk_bp_overlap_(&bp->box[s], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
+        if ((g->st[s] & REG_MASK) && mk_bp_overlap_(&bp->box[s], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
 }
 
 /* Cells the query covers over all levels, or -1 if that is beyond reason
@@ -602,8 +845,8 @@ static double cells_covered(const struct mk_hgrid *g, const mk_aabb *q)
     for (i = 0; i < g->used_count; ++i) {
         double n = 1;
         for (k = 0; k < 3; ++k) {
-            double lo = floor(ldexp((double)(&q->lo.x)[k], -g->used_list[i]));
-            double hi = floor(ldexp((double)(&q->hi.x)[k], -g->used_list[i]));
+            double lo = floor((double)(&q->lo.x)[k] * inv_cell(g->used_list[i]));
+            double hi = floor((double)(&q->hi.x)[k] * inv_cell(g->used_list[i]));
             if (!(hi - lo < 4e18) || !(fabs(lo) < 4e18) || !(fabs(hi) < 4e18)) return -1;
             n *= hi - lo + 1;
         }

@@ -21,11 +21,20 @@
  * features. `feature` may be NULL. */
 mk_vec3 mk_core_support(const mk_shape *s, mk_vec3 dir, int *feature);
 
+/* For the few helpers of the narrowphase loops that must be inlined even
+ * where the compiler's size heuristics would call them (a support is ~10
+ * flops; a call and a spilled struct return cost as much again). */
+#if defined(__GNUC__) || defined(__clang__)
+#  define MK_ALWAYS_INLINE static inline __attribute__((always_inline))
+#else
+#  define MK_ALWAYS_INLINE static inline
+#endif
+
 static inline mk_real mk_sgn_extent_(mk_real d, mk_real h) { return d >= 0 ? h : -h; }
 
 /* The body of mk_core_support, inline so the GJK/EPA loops pay no call and
  * the type switch is a well-predicted branch. *feature must be valid (in/out). */
-static inline mk_vec3 mk_core_support_inl(const mk_shape *s, mk_vec3 d, int *feature)
+MK_ALWAYS_INLINE mk_vec3 mk_core_support_inl(const mk_shape *s, mk_vec3 d, int *feature)
 {
     switch (s->type) {
     case MK_SHAPE_SPHERE:

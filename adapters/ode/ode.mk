@@ -1,4 +1,5 @@
-# adapters/ode/ode.mk: the ODE adapter (libminko_ode) and its tests (issue 7).
+# adapters/ode/ode.mk: the ODE adapter (libminko_ode), its tests and the
+# README example (issue 7).
 # ODE is double precision; the adapter is
 # built in every variant (double, single, sanitizers) and converts between
 # dReal and mk_real. pkg-config runs lazily, after `deps`.
@@ -26,3 +27,12 @@ $(B)/adapters/ode/test_ode_adapter: adapters/ode/test_ode_adapter.c $(ODE_LIB) $
 
 -include $(ODE_LIB_OBJS:.o=.d) $(B)/adapters/ode/test_ode_adapter.d
 CHECK_BINS += $(B)/adapters/ode/test_ode_adapter
+
+# The README's ODE example, extracted from its "## ODE" section, compiled
+# (strict C99) and run by `make check` in every variant.
+$(B)/readme/ode_example: README.md $(ODE_LIB) $(STATIC_LIB)
+	@mkdir -p $(@D)
+	$(say) CCLD $@
+	$(Q)awk '/^## ODE/{s=1} s && /^```c/{f=1; next} f && /^```/{exit} f' README.md > $(B)/readme/ode_example.c
+	$(Q)$(CC) -std=c99 -pedantic $(WARN) $(FP) $(INC) -Iadapters/ode $(ODE_CFLAGS) $(CFLAGS) $(B)/readme/ode_example.c $(ODE_LIB) $(STATIC_LIB) $(LDSAN) $(LDFLAGS) $(ODE_LIBS) -lm -o $@
+CHECK_BINS += $(B)/readme/ode_example

@@ -2,8 +2,8 @@
  *
  * Contract. A broadphase (mk_bp) owns a set of proxies: an AABB, a user
  * pointer, two filter words and a static flag each, named by a
- * generation-checked mk_bp_id (a destroyed proxy's id is refused, not reused
- * by accident). Callers create, move and destroy proxies, then call
+ * generation-checked mk_bp_id (a destroyed proxy's id is refused; a slot's
+ * ids repeat only after 255 reuses of that slot). Callers create, move and destroy proxies, then call
  * mk_bp_update(), which makes the pair set exactly the set of proxy pairs
  * whose closed AABBs overlap (touching boxes overlap), minus static-static
  * pairs and pairs the filter rejects. After an update, mk_bp_pairs() gives the
@@ -17,7 +17,8 @@
  * the mk_allocator given at creation: the proxy capacity is fixed then, and
  * the pair set and the grid's cell pool grow by doubling inside mk_bp_update()
  * only when they overflow (never in a steady state; a fixed-size mode refuses
- * with MK_ERR_CAPACITY instead). An update that fails leaves the broadphase
+ * with MK_ERR_CAPACITY instead), and AUTO allocates the structure it switches
+ * to (stats.switches counts that). An update that fails leaves the broadphase
  * valid: the next successful update rebuilds what was missed. Queries (region,
  * ray, stats) never allocate and never change the broadphase, so several
  * threads may query at once; no other call is thread-safe.
@@ -31,14 +32,23 @@
  *                is incoherent; it then falls back to a full sort and a sweep
  *                on the axis of largest spread, O(n log n + overlaps in 1-D).
  *                Region query O(log n + proxies in the x slab).
- *   hash grid    update O(d + candidates + cell changes): pairs are re-tested
- *                only between proxies sharing a cell, cells are revisited only
- *                when a proxy's cell range changes. Memory O(n) cells, not
- *                world volume. Loses when sizes spread over many octaves (a
- *                proxy is also filed in coarser occupied levels) and when one
- *                cell holds many proxies (tests grow with its square).
- *                Oversized/infinite proxies are tested against every proxy.
- *                Region query O(cells in the box's range).
+ *   hash grid    update O(d + candidates with a moved member + cell changes):
+ *                candidates are pairs sharing a cell, kept across frames; a
+ *                candidate's AABBs are re-read only once its two proxies have
+ *                travelled as far as its gap (or overlap) was thick, and cells
+ *                are revisited only when a proxy crosses a cell wall. Memory
+ *                O(n) cells, not world volume (about 0.8-2 kB per proxy with
+ *                its pair table). Loses when sizes spread over many octaves
+ *                (a proxy is also filed in every coarser level in use, and
+ *                candidates outnumber pairs up to ~10x), when one cell holds
+ *                many proxies (candidates grow with its square), and on fast
+ *                motion (every crossing re-files cells). Proxies with an
+ *                infinite side are candidates of every proxy. Region query
+ *                O(cells in the box's range), or O(n) when that is more.
+ *
+ * Memory per proxy is fixed at creation for SAP (about 0.5 kB); the pair
+ * table and the grid's cells grow on demand. With fixed_capacity the grid
+ * needs pair_capacity for its candidates, not just the pairs.
  */
 #ifndef MINKO_BROADPHASE_H
 #define MINKO_BROADPHASE_H
@@ -53,6 +63,10 @@ extern "C" {
  * Ordering ids orders proxies by slot, so sorted pair sets are deterministic. */
 typedef uint32_t mk_bp_id;
 #define MK_BP_NULL_ID 0u
+/* The slot of an id: below proxy_capacity, unique among live proxies, so
+ * callers can index their own arrays by it (e.g. to map pairs to objects
+ * without a call per pair). */
+#define MK_BP_SLOT(id) ((id) >> 8)
 /* Most proxies one broadphase can hold (slot numbers fit in 24 bits). */
 #define MK_BP_MAX_PROXIES (1 << 24)
 
@@ -73,7 +87,9 @@ typedef enum mk_bp_filter_mode {
 } mk_bp_filter_mode;
 
 /* Return nonzero to keep the pair. Called when a pair starts to overlap (not
- * every frame), from inside mk_bp_update(); it must not call back into bp. */
+ * every frame), when a proxy's filter words change, and again for every pair
+ * after a structure rebuild (AUTO switch, recovery from a failed update);
+ * from inside mk_bp_update(), so it must not call back into bp. */
 typedef int (*mk_bp_pair_filter)(void *ctx, mk_bp_id a, void *user_a, mk_bp_id b, void *user_b);
 
 typedef struct mk_bp_def {
@@ -98,6 +114,7 @@ typedef struct mk_bp_stats {
     int switches;           /* AUTO: changes of structure so far */
     int levels;             /* grid: occupied levels */
     int cells;              /* grid: occupied cells */
+    int candidates;         /* grid: candidate pairs held (pairs sharing a cell); others: pairs held */
     size_t bytes;           /* memory held, all blocks */
 } mk_bp_stats;
 
@@ -109,7 +126,10 @@ MK_API mk_status mk_bp_create(const mk_bp_def *def, const mk_allocator *alloc, m
 MK_API void mk_bp_destroy(mk_bp *bp);
 
 /* A static proxy never pairs with another static proxy and costs nothing per
- * update unless it is moved. The new proxy's pairs appear at the next update. */
+ * update unless it is moved. The new proxy's pairs appear at the next update.
+ * The slots of proxies destroyed since the last update are freed by it:
+ * until then they count against proxy_capacity (size it for the live
+ * proxies plus one frame's worth of destroy-and-create). */
 MK_API mk_status mk_bp_create_proxy(mk_bp *bp, mk_aabb box, void *user, uint64_t cat, uint64_t mask,
                                     int is_static, mk_bp_id *out);
 /* Its pairs disappear at the next update (reported in mk_bp_removed()). */
@@ -129,9 +149,9 @@ MK_API const mk_bp_pair *mk_bp_pairs(const mk_bp *bp, int *count);
 MK_API const mk_bp_pair *mk_bp_added(const mk_bp *bp, int *count);
 MK_API const mk_bp_pair *mk_bp_removed(const mk_bp *bp, int *count);
 
-/* Calls fn for every proxy whose AABB overlaps box (closed), as of the last
- * mk_bp_update() for SAP and grid, each once, in no set order. fn returns 0
- * to stop early. */
+/* Calls fn for every proxy whose AABB overlaps box (closed), each once, in no
+ * set order, with the AABBs of the last mk_bp_update() (proxies created since
+ * are not seen yet, destroyed ones are skipped). fn returns 0 to stop early. */
 typedef int (*mk_bp_query_fn)(void *ctx, mk_bp_id id, void *user);
 MK_API mk_status mk_bp_query_aabb(const mk_bp *bp, mk_aabb box, mk_bp_query_fn fn, void *ctx);
 

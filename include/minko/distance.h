@@ -8,10 +8,10 @@
  * inputs themselves carry. A dispatch table picks the cheapest exact method for
  * the pair: closed forms for sphere/capsule/box/plane pairs (a sphere-only
  * scene never enters GJK), GJK on the cores for separated shapes, and EPA for
- * penetrating cores. Polytope answers are then "polished": the closest
- * features named by the final simplex are re-evaluated from the original
- * geometry (face planes, edges), so distance and normal are exact to a few
- * ulps of the shapes' size rather than to a solver tolerance; smooth cores
+ * penetrating cores. The distance GJK or EPA reports is always re-evaluated
+ * with the support functions along the final normal, which for polytopes is
+ * the cross product of original feature edges: polytope answers are exact to
+ * the rounding of the relative pose, not to a solver tolerance; smooth cores
  * (cylinder, cone) converge to 1e4 eps relative. `result.method` says which
  * answered. Iterative methods carry hard caps; `result.state` says whether the
  * answer converged, hit the cap (the answer is then the best bound found), or
