@@ -12,5 +12,14 @@ $(B)/demos/bench_toi: demos/bench_toi.cpp $(B)/tests/support/oracle.o $(STATIC_L
 
 -include $(B)/demos/bench_toi.d
 DEMO_BINS += $(B)/demos/bench_toi
-BENCH_RUNS += $(B)/demos/bench_toi --json $(BENCH_DIR)/toi.jsonl
-DEMO_RUNS += $(B)/demos/bench_toi --quick --json $(BENCH_DIR)/toi_quick.jsonl
+BENCH_RUNS += $(call mk_run,$(B)/demos/bench_toi --json $(BENCH_DIR)/toi.jsonl)
+DEMO_RUNS += $(call mk_run,$(B)/demos/bench_toi --quick --json $(BENCH_DIR)/toi_quick.jsonl)
+
+# A few cases of every family and backend in `make check`, so the demo cannot rot.
+ifeq ($(SAN),0)
+$(B)/tests/bench_toi_smoke: $(B)/demos/bench_toi
+	@mkdir -p $(@D)
+	@printf '#!/bin/sh\nset -e\n%s --quick --cases 3 >/dev/null\necho "bench_toi smoke: ok"\n' $< > $@
+	@chmod +x $@
+CHECK_BINS += $(B)/tests/bench_toi_smoke
+endif
