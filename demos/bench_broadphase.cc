@@ -9,7 +9,9 @@
 // every AABB and writing the true pairs once.
 //
 //   bench_broadphase [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME] [--budget MS]
-// (--budget: time per backend and scene over all repetitions, default 12000)
+// (--budget: time per backend and scene over all repetitions, default 12000;
+//  --skip NAME leaves one backend out, e.g. bullet.axis_sweep3_32 at n = 100k,
+//  whose proxy creation alone is quadratic: minutes per scene)
 // (--backend runs one backend, for profiling with callgrind; no ratios then)
 //
 // Output: JSON Lines per ../shared/BENCH_FORMAT.md (suite "broad") and a table.
@@ -529,7 +531,7 @@ int main(int argc, char **argv)
     bool quick = false;
     int reps = 3, only_n = 0;
     double budget_ms = 12000;
-    const char *json = nullptr, *only = nullptr, *only_backend = nullptr;
+    const char *json = nullptr, *only = nullptr, *only_backend = nullptr, *skip_backend = nullptr;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
         else if (!std::strcmp(argv[i], "--json") && i + 1 < argc) json = argv[++i];
@@ -538,7 +540,8 @@ int main(int argc, char **argv)
         else if (!std::strcmp(argv[i], "--backend") && i + 1 < argc) only_backend = argv[++i];
         else if (!std::strcmp(argv[i], "--n") && i + 1 < argc) only_n = std::atoi(argv[++i]);
         else if (!std::strcmp(argv[i], "--budget") && i + 1 < argc) budget_ms = std::atof(argv[++i]);
-        else { std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME] [--budget MS]\n", argv[0]); return 2; }
+        else if (!std::strcmp(argv[i], "--skip") && i + 1 < argc) skip_backend = argv[++i];
+        else { std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME] [--skip NAME] [--budget MS]\n", argv[0]); return 2; }
     }
     std::vector<Plan> plan;
     if (quick) {
@@ -571,9 +574,13 @@ int main(int argc, char **argv)
             for (int b = 0; b < NBACKENDS; ++b) {
                 Result r;
                 if (left[b] <= 0) continue;
-                if (only_backend) {
+                if (only_backend || skip_backend) {
                     std::unique_ptr<Backend> probe(make_backend(b));
-                    if (std::strcmp(probe->name(), only_backend)) { res[b].backend = probe->name(); res[b].failed = true; continue; }
+                    if ((only_backend && std::strcmp(probe->name(), only_backend)) || (skip_backend && !std::strcmp(probe->name(), skip_backend))) {
+                        res[b].backend = probe->name();
+                        res[b].failed = true;
+                        continue;
+                    }
                 }
                 run_backend(s, b, r, left[b]);
                 for (double t : r.ms) left[b] -= t;
