@@ -605,6 +605,10 @@ int main(int argc, char **argv)
             const Result &r = res[b];
             double med = r.median(), cmed = r.cpu_median();
             if (is_minko(b) && r.missing) ++bad;
+            if (r.frames == 0) { // left out (--skip/--backend) or failed before a frame: no figures to write
+                std::printf("  %-24s %10s%s\n", r.backend.c_str(), "-", r.failed && !(only_backend || skip_backend) ? "  FAILED" : "  not run");
+                continue;
+            }
             std::printf("  %-24s %10.3f %10.3f %8.2f %9ld %9ld %12.0f %10.0f%s\n", r.backend.c_str(), cmed, med, cmed / mk, r.missing, r.extra,
                         r.frames && r.cand_sum > 0 ? r.cand_sum / r.frames : avg_pairs, r.bytes_per_proxy, r.failed ? "  FAILED" : "");
             if (out) {
