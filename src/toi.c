@@ -93,7 +93,7 @@ mk_status mk_sweep_transform(const mk_sweep *sw, mk_real t, mk_transform *out)
     return MK_OK;
 }
 
-/* Largest distance from c (shape frame) to a point of the solid. */
+/* Largest distance from c (shape frame) to a point of the solid, or a bound on it. */
 static mk_real bounding_radius(const mk_shape *s, mk_vec3 c)
 {
     mk_real rho_c = mk_sqrt_(c.x * c.x + c.y * c.y), far = 0;
@@ -109,12 +109,9 @@ static mk_real bounding_radius(const mk_shape *s, mk_vec3 c)
         far = mk_max(mk_v3_dist(c, mk_v3(0, 0, h)), mk_v3_len(mk_v3(rho_c + s->u.cone.radius, 0, c.z + h)));
         break;
     }
-    case MK_SHAPE_HULL: {
-        const mk_hull *h = s->u.hull;
-        int i;
-        for (i = 0; i < h->vertex_count; ++i) far = mk_max(far, mk_v3_dist(c, h->vertices[i]));
+    case MK_SHAPE_HULL: /* O(1): through the centroid, exact when c is the centroid */
+        far = mk_v3_dist(c, s->u.hull->centroid) + s->u.hull->outer_radius;
         break;
-    }
     default: break;
     }
     return far + s->radius;
