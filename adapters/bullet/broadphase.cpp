@@ -307,6 +307,34 @@ void Broadphase::printStats()
                 s.full_rebuilds, (unsigned long)s.bytes);
 }
 
+btBroadphaseInterface *set_broadphase(btCollisionWorld *world, btBroadphaseInterface *replacement)
+{
+    btBroadphaseInterface *old = world->getBroadphase();
+    btDispatcher *d = world->getDispatcher();
+    btCollisionObjectArray &objs = world->getCollisionObjectArray();
+    std::vector<int> group(objs.size()), mask(objs.size());
+    std::vector<char> had(objs.size(), 0);
+    for (int i = 0; i < objs.size(); i++) {
+        btBroadphaseProxy *h = objs[i]->getBroadphaseHandle();
+        if (!h) continue;
+        had[i] = 1;
+        group[i] = h->m_collisionFilterGroup;
+        mask[i] = h->m_collisionFilterMask;
+        old->getOverlappingPairCache()->cleanProxyFromPairs(h, d);
+        old->destroyProxy(h, d);
+        objs[i]->setBroadphaseHandle(nullptr);
+    }
+    world->setBroadphase(replacement);
+    for (int i = 0; i < objs.size(); i++) {
+        if (!had[i]) continue;
+        btVector3 lo, hi;
+        objs[i]->getCollisionShape()->getAabb(objs[i]->getWorldTransform(), lo, hi);
+        objs[i]->setBroadphaseHandle(replacement->createProxy(lo, hi, objs[i]->getCollisionShape()->getShapeType(),
+                                                              objs[i], group[i], mask[i], d));
+    }
+    return old;
+}
+
 mk_status Broadphase::take_error()
 {
     mk_status st = m_error;

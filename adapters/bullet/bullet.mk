@@ -36,3 +36,12 @@ $(B)/adapters/bullet/test_minko_bullet: adapters/bullet/test_minko_bullet.cpp $(
 
 -include $(MKB_OBJS:.o=.d) $(B)/adapters/bullet/test_minko_bullet.d
 CHECK_BINS += $(B)/adapters/bullet/test_minko_bullet
+
+# The Bullet example in README.md (the first C++ block after "## Bullet") must
+# compile and run, in every build.
+$(B)/adapters/bullet/readme_example: README.md $(MKB_LIB) $(STATIC_LIB)
+	@mkdir -p $(@D)
+	$(say) CXXLD $@
+	$(Q)awk '/^## Bullet/{s=1} s && /^```cpp/{f=1; next} f && /^```/{exit} f' README.md > $(B)/adapters/bullet/readme_example.cpp
+	$(Q)$(CXX) $(MKB_CXXFLAGS) $(B)/adapters/bullet/readme_example.cpp $(MKB_LIB) $(STATIC_LIB) $(LDSAN) $(LDFLAGS) $(BULLET_LIBS) -lm -o $@
+CHECK_BINS += $(B)/adapters/bullet/readme_example

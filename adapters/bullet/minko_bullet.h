@@ -194,6 +194,13 @@ bool minko_shape_type(int proxyType);
 // mkb::CollisionConfiguration; returns false otherwise.
 bool set_narrowphase(btCollisionWorld *world, Backend b);
 
+// Switch a running world's broadphase: every collision object's proxy moves
+// to `replacement` (same group and mask, uids from the new broadphase) and the
+// world uses it from now on; pairs, their algorithms and warm-start state are
+// dropped and rebuilt at the next step. Returns the previous broadphase, which
+// the caller now owns (the world never owned it).
+btBroadphaseInterface *set_broadphase(btCollisionWorld *world, btBroadphaseInterface *replacement);
+
 }  // namespace mkb
 
 #endif

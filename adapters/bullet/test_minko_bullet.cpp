@@ -698,6 +698,28 @@ START_TEST(bp_ray_and_sweep_hits_equal_native)
 }
 END_TEST
 
+// A running world moves from Dbvt to Minko's broadphase and back; the pair
+// set is exact from the first step on Minko and nothing falls through.
+START_TEST(bp_switch_at_run_time)
+{
+    TestWorld w(new btDbvtBroadphase());
+    fill_scene(w, 30, 8);
+    for (int step = 0; step < 60; step++) w.world->stepSimulation(btScalar(1) / 60, 0);
+    btBroadphaseInterface *old = mkb::set_broadphase(w.world, new mkb::Broadphase(MK_BP_SAP));
+    delete old;
+    w.bp = w.world->getBroadphase();
+    for (int step = 0; step < 60; step++) {
+        w.world->stepSimulation(btScalar(1) / 60, 0);
+        check_exact_pairs(w, step);
+    }
+    old = mkb::set_broadphase(w.world, new btDbvtBroadphase());
+    delete old;
+    w.bp = w.world->getBroadphase();
+    for (int step = 0; step < 60; step++) w.world->stepSimulation(btScalar(1) / 60, 0);
+    for (size_t i = 6; i < w.bodies.size(); i++) ck_assert(w.bodies[i]->getWorldTransform().getOrigin().y() > 0);  // none fell through
+}
+END_TEST
+
 // Bad AABBs are refused with a status and the proxy keeps its last box;
 // resetPool restarts uids once the broadphase is empty.
 START_TEST(bp_bad_input_and_reset)
@@ -1026,6 +1048,7 @@ Suite *suite()
     tcase_add_test(b, bp_proxy_removal_during_simulation);
     tcase_add_test(b, bp_filtering);
     tcase_add_test(b, bp_ray_and_sweep_hits_equal_native);
+    tcase_add_test(b, bp_switch_at_run_time);
     tcase_add_test(b, bp_bad_input_and_reset);
     suite_add_tcase(s, b);
     TCase *n = tcase_create("narrowphase");
