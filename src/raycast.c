@@ -75,6 +75,9 @@ static mk_vec3 closest_on_cone(mk_real R, mk_real h, mk_vec3 p)
 /* Closest point of the core to p, local frame; p itself when p is inside. */
 static mk_vec3 closest_on_core(const mk_shape *s, mk_vec3 p, mk_gjk_cache *cache)
 {
+#ifdef MK_WITHOUT_GJK
+    (void)cache; /* rounded hulls are refused before getting here */
+#endif
     switch (s->type) {
     case MK_SHAPE_BOX: {
         mk_vec3 e = s->u.half_extents;
