@@ -97,6 +97,56 @@ static void cap_polygon(mk_real r, mk_real z, int cap, mk_vec3 d, mk_feat *f)
     f->normal = mk_v3(0, 0, cap ? 1 : -1);
 }
 
+static int hull_edge_id(const mk_hull *h, int e) { return e < h->edges[e].twin ? e : h->edges[e].twin; }
+
+/* The face around hull vertex v best aligned with d. The support face is not
+ * simply the face best aligned over the whole hull (a far face of a sliver
+ * can beat every face at the support vertex); the deepest point is v. */
+static int hull_face_at(const mk_hull *h, int v, mk_vec3 d)
+{
+    int e0 = h->vertex_edge[v], e = e0, best = h->edges[e0].face;
+    mk_real best_dot = -MK_REAL_MAX;
+    do {
+        int face = h->edges[e].face;
+        mk_real dd = mk_v3_dot(h->planes[face].normal, d);
+        if (dd > best_dot) {
+            best_dot = dd;
+            best = face;
+        }
+        e = h->edges[h->edges[e].twin].next;
+    } while (e != e0);
+    return best;
+}
+
+/* The support face of a hull as a polygon. A face with more than MK_FEAT_MAX
+ * vertices keeps every k-th one, starting at the support vertex so the
+ * deepest point survives; a chord is named by the first hull edge it spans. */
+static void hull_face(const mk_hull *h, mk_vec3 d, mk_feat *f)
+{
+    int v = mk_hull_support_index(h, d, -1), face = hull_face_at(h, v, d);
+    int e0 = h->face_edge[face], e = e0, count = 0, step, i = 0, n = 0;
+    do {
+        count++;
+        if (h->edges[e].origin == v) e0 = e;
+        e = h->edges[e].next;
+    } while (e != h->face_edge[face]);
+    step = (count + MK_FEAT_MAX - 1) / MK_FEAT_MAX;
+    e = e0;
+    do {
+        if (i++ % step == 0) {
+            f->v[n] = h->vertices[h->edges[e].origin];
+            f->vid[n] = V(h->edges[e].origin);
+            f->eid[n] = E(hull_edge_id(h, e));
+            n++;
+        }
+        e = h->edges[e].next;
+    } while (e != e0);
+    f->count = n;
+    f->exact = 1;
+    f->id = F(face);
+    f->normal = h->planes[face].normal;
+}
+
 static void segment_feat(mk_vec3 p0, mk_feature f0, mk_vec3 p1, mk_feature f1, mk_feature e, mk_feat *f)
 {
     f->count = 2;
@@ -156,6 +206,9 @@ void mk_support_feature(const mk_shape *s, mk_vec3 d, mk_feat *f)
         }
         break;
     }
+    case MK_SHAPE_HULL:
+        hull_face(s->u.hull, d, f);
+        break;
     case MK_SHAPE_SPHERE:
     default:
         point_feat(mk_v3_zero(), V(0), f);
@@ -216,6 +269,21 @@ mk_feature mk_feature_at(const mk_shape *s, mk_vec3 p, mk_vec3 n)
         }
         if (cap >= 0 && rim) return E(cap);
         return cap >= 0 ? F(cap) : F(SIDE_FACE);
+    }
+    case MK_SHAPE_HULL: {
+        /* The support vertex along n, an edge leaving it, or its face best aligned with n. */
+        const mk_hull *h = s->u.hull;
+        int v = mk_hull_support_index(h, n, -1), e0 = h->vertex_edge[v], e = e0;
+        mk_real tol = h->outer_radius * MK_REAL_EPSILON * 256;
+        mk_vec3 pv = h->vertices[v];
+        if (mk_v3_dist(p, pv) <= tol) return V(v);
+        do {
+            mk_vec3 u = mk_v3_sub(h->vertices[h->edges[h->edges[e].twin].origin], pv);
+            mk_real t = mk_v3_dot(mk_v3_sub(p, pv), u) / mk_v3_len2(u);
+            if (t >= 0 && t <= 1 && mk_v3_dist(mk_v3_mad(pv, t, u), p) <= tol) return E(hull_edge_id(h, e));
+            e = h->edges[h->edges[e].twin].next;
+        } while (e != e0);
+        return F(hull_face_at(h, v, n));
     }
     case MK_SHAPE_SPHERE:
     default:

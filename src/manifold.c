@@ -193,11 +193,9 @@ static mk_status generic(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 
 /* ---- dispatch ------------------------------------------------------------- */
 
-/* The routine for (ta, tb), or NULL when only (tb, ta) has one. Hull
- * support features are not written yet: hulls are refused for now. */
+/* The routine for (ta, tb), or NULL when only (tb, ta) has one. */
 static pair_fn pair_table(mk_shape_type ta, mk_shape_type tb)
 {
-    if (ta == MK_SHAPE_HULL || tb == MK_SHAPE_HULL) return NULL;
     if (tb == MK_SHAPE_PLANE) return ta == MK_SHAPE_PLANE ? NULL : shape_plane;
     if (ta == MK_SHAPE_PLANE) return NULL;
     switch (ta) {

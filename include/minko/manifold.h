@@ -21,11 +21,12 @@
  * reference is the exact minimum axis. Bad input (NULL, NaN/Inf,
  * non-unit rotations, invalid shapes, a negative margin) returns a status
  * and leaves *out untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing
- * allocates; every query runs in A's local frame. Pairs available today:
- * sphere, capsule and box among themselves except box-box, and sphere, box,
- * capsule, cylinder and cone against a plane; the others (box-box and hulls
- * through SAT, the remaining smooth pairs through GJK/EPA) return
- * MK_ERR_UNSUPPORTED until those modules are in the library.
+ * allocates; every query runs in A's local frame. Every pair of shape types
+ * is supported except plane-plane: closed forms for sphere, capsule and
+ * box-capsule pairs and for anything against a plane; the exact GJK/EPA
+ * normal and closest points for the others (box-box, hulls, cylinders,
+ * cones), whose support faces are then clipped. A build without GJK or EPA
+ * (MK_WITHOUT) returns MK_ERR_UNSUPPORTED for those.
  *
  * Feature indices per shape type: box vertices 0..7 are the corner bits zyx
  * (bit set = +extent), box edges 0..11 are 4*axis + the corner bits of the
