@@ -183,14 +183,28 @@ static int walk(sat_ctx *c, const sat_edge *eb, int v)
     int from = -1, steps = 0;
     while (!c->stopped) {
         int e0 = a->vertex_edge[v], e = e0, next = -1, through = -1;
+        mk_vec3 pv = a->vertices[v];
         do {
-            int t = a->edges[e].twin, und = e < t ? e : t, face;
+            const mk_hull_edge *E = &a->edges[e];
+            int t = E->twin, und = e < t ? e : t;
             if (und != from) {
-                sat_edge ea;
-                prepare_edge(a, e, &ea);
-                face = pair(c, &ea, eb);
-                if (face < 0 || (face > 0 && next >= 0)) return 0;
-                if (face > 0) next = a->edges[t].origin, through = und;
+                /* The first sign test inline, before anything else is loaded:
+                 * it rejects most of the edges around a vertex. */
+                mk_vec3 ea = mk_v3_sub(a->vertices[a->edges[t].origin], pv);
+                mk_real s1 = mk_v3_dot(eb->n1, ea), s2 = mk_v3_dot(eb->n2, ea), tol = SAT_SIGN_TOL * mk_v3_max_abs(ea);
+                if (!((s1 > tol && s2 > tol) || (s1 < -tol && s2 < -tol))) {
+                    sat_edge x;
+                    int face;
+                    x.p = pv;
+                    x.e = ea;
+                    x.n1 = a->planes[E->face].normal;
+                    x.n2 = a->planes[a->edges[t].face].normal;
+                    x.tol = tol;
+                    x.index = und;
+                    face = pair(c, &x, eb);
+                    if (face < 0 || (face > 0 && next >= 0)) return 0;
+                    if (face > 0) next = a->edges[t].origin, through = und;
+                }
             }
             e = a->edges[t].next;
         } while (e != e0);
