@@ -104,18 +104,25 @@ static inline mk_pair mk_pair_make(const mk_shape *a, mk_transform xa, const mk_
     return mk_pair_in(a, mk_rotation_of(xa.q), xa.p, b, xb);
 }
 
-/* Support of A - B along d (A's frame). *ha, *hb: hints in, vertex indices out. */
-MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support(const mk_pair *p, mk_vec3 d, int ha, int hb)
+/* Support of A - B along d (A's frame) for shapes of types ta, tb; ha, hb:
+ * hints (previous vertex indices), returned as the new indices. */
+MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support_typed(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, mk_vec3 d,
+                                                     int ha, int hb)
 {
     mk_cso_vertex v;
     mk_vec3 bl;
     v.ia = ha;
     v.ib = hb;
-    v.a = mk_core_support_inl(p->a, d, &v.ia);
-    bl = mk_core_support_inl(p->b, mk_mat3_tmul_v3(p->r, mk_v3_neg(d)), &v.ib);
+    v.a = mk_core_support_typed(p->a, ta, d, &v.ia);
+    bl = mk_core_support_typed(p->b, tb, mk_mat3_tmul_v3(p->r, mk_v3_neg(d)), &v.ib);
     v.b = mk_v3_add(mk_mat3_mul_v3(p->r, bl), p->t);
     v.w = mk_v3_sub(v.a, v.b);
     return v;
+}
+
+MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support(const mk_pair *p, mk_vec3 d, int ha, int hb)
+{
+    return mk_pair_support_typed(p, p->a->type, p->b->type, d, ha, hb);
 }
 
 /* sep(n) = min_B n.b - max_A n.a for a unit n from A towards B: a lower bound
