@@ -312,7 +312,7 @@ mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
         return MK_OK;
     }
 #endif
-    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, NULL, &ra, &ans) : run(a, xa, b, xb, (path)rt.path, NULL, &ra, &ans);
+    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ra, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
     if (st != MK_OK) return st;
     *overlapping = ans.hit.distance <= 0;
     return MK_OK;
