@@ -566,6 +566,27 @@ void json_row(FILE *f, const Row &r)
                  r.late, r.wrong, r.failures, r.dist_min, r.dist_max, r.iterations);
 }
 
+// The speed target, read off one run: the cheapest Minko row whose
+// accuracy is at least Bullet's conservative advancement's, and the time ratio.
+std::string compare_with_bullet(const std::vector<Row> &rows)
+{
+    const Row *bt = nullptr, *best = nullptr;
+    for (const Row &r : rows)
+        if (r.backend == std::string(kBullet) + ".continuous_convex") bt = &r;
+    if (!bt) return "";
+    for (const Row &r : rows)
+        if (r.backend.compare(0, 5, "minko") == 0 && r.p99 <= bt->p99 && r.tunnelled <= bt->tunnelled && r.late <= bt->late &&
+            r.failures <= bt->failures && (!best || r.ns < best->ns))
+            best = &r;
+    char buf[256];
+    if (!best)
+        std::snprintf(buf, sizeof buf, "  %-21s none of Minko's settings is as accurate", bt->family.c_str());
+    else
+        std::snprintf(buf, sizeof buf, "  %-21s %-20s %7.0f ns (err p99 %.2e)  vs %7.0f ns (err p99 %.2e): ratio %.2f", bt->family.c_str(),
+                      best->backend.c_str(), best->ns, best->p99, bt->ns, bt->p99, best->ns / bt->ns);
+    return buf;
+}
+
 } // namespace
 
 int main(int argc, char **argv)
@@ -625,16 +646,23 @@ int main(int argc, char **argv)
                 n, (unsigned long long)seed);
     std::printf("%-21s %-9s %-38s %9s %9s %9s %9s %5s %5s %5s %5s %10s %10s %6s\n", "family", "motion", "backend", "ns/query", "err p50",
                 "err p99", "err max", "tunl", "late", "wrong", "fail", "d@hit min", "d@hit max", "iters");
+    std::vector<std::string> summary;
     for (const Family &f : families) {
+        std::vector<Row> rows;
         for (auto &be : backends) {
             if (be->linear_only && f.rotating) continue;
             if (only_backend && be->name.compare(0, std::strlen(only_backend), only_backend)) continue;
             Row r = measure(f, *be, loops);
             print_row(r);
             if (jf) json_row(jf, r);
+            rows.push_back(r);
         }
         std::printf("\n");
+        summary.push_back(compare_with_bullet(rows));
     }
+    std::printf("Minko's fastest setting at equal or better accuracy (err p99, tunnelled, late) than %s.continuous_convex:\n", kBullet);
+    for (const std::string &line : summary)
+        if (!line.empty()) std::printf("%s\n", line.c_str());
     if (jf) std::fclose(jf);
     return 0;
 }

@@ -2,12 +2,18 @@
  *
  * Everything runs in the shape's frame. Spheres and planes have closed forms;
  * unrounded hulls are clipped against their face planes. Every other case is
- * one Newton iteration on f(t) = dist(o + t d, core) - r: f is convex in t
+ * one Newton iteration on f(t) = dist(o + t d, core) - r (closed forms for the
+ * distance, GJK for a rounded hull's core): f is convex in t
  * (distance to a convex set is convex along a line), so from a point before
  * the first root each Newton step lands at or before that root, and a
  * non-negative slope proves there is no root ahead. The iteration starts where
  * the ray enters the shape's local AABB, which contains the solid. */
 #include "minko/raycast.h"
+#ifndef MK_WITHOUT_GJK
+#  include "gjk.h"
+#else
+#  include "minko/distance.h" /* mk_gjk_cache */
+#endif
 #include "shape_internal.h"
 
 /* Grazing rays converge linearly (the error halves per step), so 64 steps
@@ -27,51 +33,26 @@ static mk_vec3 closest_on_segment(mk_vec3 a, mk_vec3 b, mk_vec3 p)
     return mk_v3_mad(a, u, e);
 }
 
-/* Closest point of face f's polygon to p. When the projection of p leaves the
- * polygon, the answer lies on one of the edges whose outward side holds it. */
-static mk_vec3 closest_on_face(const mk_hull *h, int f, mk_vec3 p)
+#ifndef MK_WITHOUT_GJK
+/* Closest point of a hull core to p: GJK of the hull against the point
+ * (the CSO is hull - p, whose point nearest the origin is c - p). The cache
+ * carries the simplex from one Newton step to the next along the ray. */
+static mk_vec3 closest_on_hull(const mk_shape *s, mk_vec3 p, mk_gjk_cache *cache)
 {
-    mk_vec3 n = h->planes[f].normal;
-    mk_vec3 q = mk_v3_mad(p, h->planes[f].offset - mk_v3_dot(n, p), n);
-    mk_vec3 c = q;
-    mk_real best = MK_REAL_MAX;
-    int e0 = h->face_edge[f], e = e0;
-    do {
-        mk_vec3 a = h->vertices[h->edges[e].origin];
-        mk_vec3 b = h->vertices[h->edges[h->edges[e].next].origin];
-        /* Faces run counter-clockwise seen from outside, so (b - a) x n points out of the polygon. */
-        if (mk_v3_dot(mk_v3_sub(q, a), mk_v3_cross(mk_v3_sub(b, a), n)) > 0) {
-            mk_vec3 x = closest_on_segment(a, b, p);
-            mk_real d2 = mk_v3_len2(mk_v3_sub(p, x));
-            if (d2 < best) {
-                best = d2;
-                c = x;
-            }
-        }
-        e = h->edges[e].next;
-    } while (e != e0);
-    return c;
+    mk_shape point;
+    mk_pair pair;
+    mk_gjk_result g;
+    point.type = MK_SHAPE_SPHERE; /* a point core: GJK never sees radii */
+    point.radius = 1;
+    pair.a = s;
+    pair.b = &point;
+    pair.r = mk_mat3_identity();
+    pair.t = p;
+    mk_gjk(&pair, cache, 0, 0, &g);
+    mk_gjk_cache_store(&g.s, g.normal, cache);
+    return g.overlap ? p : mk_v3_add(p, g.v);
 }
-
-/* The closest point of a convex polytope to an outside point lies on a face
- * that point sees; the nearest of those faces' closest points is the answer. */
-static mk_vec3 closest_on_hull(const mk_hull *h, mk_vec3 p)
-{
-    mk_vec3 c = p;
-    mk_real best = MK_REAL_MAX;
-    int f;
-    for (f = 0; f < h->face_count; ++f) {
-        if (mk_v3_dot(h->planes[f].normal, p) > h->planes[f].offset) {
-            mk_vec3 x = closest_on_face(h, f, p);
-            mk_real d2 = mk_v3_len2(mk_v3_sub(p, x));
-            if (d2 < best) {
-                best = d2;
-                c = x;
-            }
-        }
-    }
-    return c;
-}
+#endif
 
 /* Solid cone with apex (0, 0, h) and base disc of radius R at z = -h. In the
  * (rho, z) half-plane the cross-section is the triangle apex / base rim / base
@@ -92,8 +73,11 @@ static mk_vec3 closest_on_cone(mk_real R, mk_real h, mk_vec3 p)
 }
 
 /* Closest point of the core to p, local frame; p itself when p is inside. */
-static mk_vec3 closest_on_core(const mk_shape *s, mk_vec3 p)
+static mk_vec3 closest_on_core(const mk_shape *s, mk_vec3 p, mk_gjk_cache *cache)
 {
+#ifdef MK_WITHOUT_GJK
+    (void)cache; /* rounded hulls are refused before getting here */
+#endif
     switch (s->type) {
     case MK_SHAPE_BOX: {
         mk_vec3 e = s->u.half_extents;
@@ -107,7 +91,9 @@ static mk_vec3 closest_on_core(const mk_shape *s, mk_vec3 p)
         return mk_v3(p.x * k, p.y * k, mk_clamp(p.z, -h, h));
     }
     case MK_SHAPE_CONE: return closest_on_cone(s->u.cone.radius, s->u.cone.half_height, p);
-    case MK_SHAPE_HULL: return closest_on_hull(s->u.hull, p);
+#ifndef MK_WITHOUT_GJK
+    case MK_SHAPE_HULL: return closest_on_hull(s, p, cache);
+#endif
     default: return mk_v3_zero(); /* sphere: the point core */
     }
 }
@@ -246,8 +232,11 @@ static int ray_hull_planes(const mk_hull *hl, mk_vec3 o, mk_vec3 d, local_hit *h
 static int ray_newton(const mk_shape *s, mk_vec3 o, mk_vec3 d, local_hit *h)
 {
     mk_aabb box;
+    mk_gjk_cache cache;
     mk_real t, t_end, r = s->radius, size, tol;
     int i;
+    cache.count = 0;
+    cache.dir = mk_v3_zero();
     mk_shape_aabb(s, mk_transform_identity(), &box);
     if (!clip_aabb(box, o, d, &t, &t_end)) return 0;
     size = mk_max(mk_v3_max_abs(box.hi), mk_v3_max_abs(box.lo));
@@ -255,7 +244,7 @@ static int ray_newton(const mk_shape *s, mk_vec3 o, mk_vec3 d, local_hit *h)
     tol = 16 * MK_REAL_EPSILON * (mk_v3_max_abs(o) + mk_v3_max_abs(d) + size);
     for (i = 0; i < RAY_MAX_ITERATIONS; ++i) {
         mk_vec3 p = mk_v3_mad(o, t, d);
-        mk_vec3 v = mk_v3_sub(p, closest_on_core(s, p));
+        mk_vec3 v = mk_v3_sub(p, closest_on_core(s, p, &cache));
         mk_real dist = mk_v3_len(v), f = dist - r, slope, step;
         if (f <= tol) {
             h->t = t;
@@ -290,6 +279,9 @@ mk_status mk_raycast(const mk_shape *s, mk_transform xf, mk_vec3 origin, mk_vec3
     if ((st = mk_shape_validate(s)) != MK_OK) return st;
     if ((st = check_transform(xf)) != MK_OK) return st;
     if (!mk_v3_is_valid(origin) || !mk_v3_is_valid(translation)) return MK_ERR_NOT_FINITE;
+#ifdef MK_WITHOUT_GJK
+    if (s->type == MK_SHAPE_HULL && s->radius > 0) return MK_ERR_UNSUPPORTED; /* a rounded hull needs GJK */
+#endif
     xf.q = mk_quat_normalize(xf.q);
     o = mk_quat_inv_rotate(xf.q, mk_v3_sub(origin, xf.p));
     d = mk_quat_inv_rotate(xf.q, translation);

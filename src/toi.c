@@ -93,7 +93,7 @@ mk_status mk_sweep_transform(const mk_sweep *sw, mk_real t, mk_transform *out)
     return MK_OK;
 }
 
-/* Largest distance from c (shape frame) to a point of the solid. */
+/* Largest distance from c (shape frame) to a point of the solid, or a bound on it. */
 static mk_real bounding_radius(const mk_shape *s, mk_vec3 c)
 {
     mk_real rho_c = mk_sqrt_(c.x * c.x + c.y * c.y), far = 0;
@@ -109,12 +109,9 @@ static mk_real bounding_radius(const mk_shape *s, mk_vec3 c)
         far = mk_max(mk_v3_dist(c, mk_v3(0, 0, h)), mk_v3_len(mk_v3(rho_c + s->u.cone.radius, 0, c.z + h)));
         break;
     }
-    case MK_SHAPE_HULL: {
-        const mk_hull *h = s->u.hull;
-        int i;
-        for (i = 0; i < h->vertex_count; ++i) far = mk_max(far, mk_v3_dist(c, h->vertices[i]));
+    case MK_SHAPE_HULL: /* O(1): through the centroid, exact when c is the centroid */
+        far = mk_v3_dist(c, s->u.hull->centroid) + s->u.hull->outer_radius;
         break;
-    }
     default: break;
     }
     return far + s->radius;
@@ -198,6 +195,7 @@ typedef struct toi_body {
     mk_vec3 c;     /* rotation centre at that time, relative to A's c0 */
     int hint;      /* support vertex hint */
     int turning;   /* 0: R is the same at every time */
+    mk_vec3 foot;  /* a plane's support: the foot of the centre on it (planes never turn) */
 } toi_body;
 
 /* L(d) = c0 + c1 d + c2 d^2 + c3 d^3 - sum_i h_i(u_i + d v_i), with c2, c3 <= 0. */
@@ -222,6 +220,8 @@ static void body_init(toi_body *b, const mk_shape *s, const mk_sweep *sw, mk_vec
     /* A turn that moves no point by more than the rounding of the coordinates
      * (equal start and end orientations up to renormalisation) is no turn. */
     b->turning = mk_v3_len(b->w) * b->rho > 8 * MK_REAL_EPSILON * (b->rho + mk_v3_max_abs(sw->c0));
+    if (s->type == MK_SHAPE_PLANE)
+        b->foot = mk_v3_scale(mk_mat3_mul_v3(b->R, s->u.plane.normal), s->u.plane.offset - mk_v3_dot(s->u.plane.normal, sw->local_center));
 }
 
 static void body_at(toi_body *b, mk_real t, mk_vec3 origin)
@@ -245,10 +245,8 @@ static mk_vec3 support_rel(toi_body *b, mk_vec3 m)
 {
     mk_vec3 p, w;
     mk_real l;
-    if (b->s->type == MK_SHAPE_PLANE)
-        return mk_v3_scale(mk_mat3_mul_v3(b->R, b->s->u.plane.normal),
-                           b->s->u.plane.offset - mk_v3_dot(b->s->u.plane.normal, b->sw->local_center));
-    p = mk_core_support(b->s, mk_mat3_tmul_v3(b->R, m), &b->hint);
+    if (b->s->type == MK_SHAPE_PLANE) return b->foot;
+    p = mk_core_support_inl(b->s, mk_mat3_tmul_v3(b->R, m), &b->hint);
     w = mk_mat3_mul_v3(b->R, mk_v3_sub(p, b->sw->local_center));
     if (b->s->radius > 0 && (l = mk_v3_len(m)) > 0) w = mk_v3_mad(w, b->s->radius / l, m);
     return w;
@@ -269,6 +267,20 @@ static mk_real bound_eval(const toi_bound *L, mk_real d, mk_real *slope)
     return value;
 }
 
+/* Adds body b's support term h(u + d v) to L, or, for a body that does not
+ * turn (v = 0), its constant value. */
+static void bound_term(toi_bound *L, toi_body *b, mk_vec3 u, mk_vec3 v)
+{
+    if (!b->turning) {
+        L->c0 -= mk_v3_dot(u, support_rel(b, u));
+        return;
+    }
+    L->body[L->terms] = b;
+    L->u[L->terms] = u;
+    L->v[L->terms] = v;
+    ++L->terms;
+}
+
 /* Axis n fixed in the world; D = cB - cA at t0, V = dcB - dcA. */
 static toi_bound bound_fixed(toi_body *a, toi_body *b, mk_vec3 n, mk_vec3 D, mk_vec3 V, mk_real target)
 {
@@ -278,13 +290,9 @@ static toi_bound bound_fixed(toi_body *a, toi_body *b, mk_vec3 n, mk_vec3 D, mk_
     L.c1 = mk_v3_dot(n, V);
     L.c2 = -MK_REAL(0.5) * (mk_v3_len(a->w) * mk_v3_len(ra) * a->rho + mk_v3_len(b->w) * mk_v3_len(rb) * b->rho);
     L.c3 = 0;
-    L.terms = 2;
-    L.body[0] = a;
-    L.u[0] = n;
-    L.v[0] = ra;
-    L.body[1] = b;
-    L.u[1] = mk_v3_neg(n);
-    L.v[1] = mk_v3_neg(rb);
+    L.terms = 0;
+    bound_term(&L, a, n, ra);
+    bound_term(&L, b, mk_v3_neg(n), mk_v3_neg(rb));
     return L;
 }
 
@@ -303,7 +311,7 @@ static toi_bound bound_turning(toi_body *T, toi_body *O, mk_vec3 e, mk_vec3 D, m
     L.c2 = mk_min(0, mk_v3_dot(a, V)) - MK_REAL(0.5) * wt * la * mk_v3_len(D) -
            O->rho * (MK_REAL(0.5) * wo * mk_v3_len(mk_v3_cross(O->w, e)) + mk_v3_len(mk_v3_cross(O->w, a)) + MK_REAL(0.5) * wt * la);
     L.c3 = -MK_REAL(0.5) * wt * la * mk_v3_len(V);
-    L.terms = 1;
+    L.terms = 1; /* O's direction turns with T even when O itself does not */
     L.body[0] = O;
     L.u[0] = mk_v3_neg(e);
     L.v[0] = mk_v3_neg(b);
@@ -472,10 +480,9 @@ static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real tar
     mk_real g0, rate, step, best_reach = -1, best_g = 0, best_s = 0;
     int count = 1, i, best = -1;
     *clear = 0;
-    L[0] = bound_fixed(a, b, n, D, V, target);
     g0 = q->separation - target; /* = L(0) */
     if (!(g0 > 0)) return 0;        /* n does not separate the shapes beyond target: no proof from it */
-    rate = -L[0].c1 + mk_v3_len(L[0].v[0]) * a->rho + mk_v3_len(L[0].v[1]) * b->rho;
+    rate = -mk_v3_dot(n, V) + mk_v3_len(mk_v3_cross(n, a->w)) * a->rho + mk_v3_len(mk_v3_cross(n, b->w)) * b->rho;
     step = rate > 0 ? g0 / rate : dmax;
     if (step >= dmax) {
         *clear = 1;
@@ -483,6 +490,7 @@ static mk_real advance(toi_body *a, toi_body *b, const toi_query *q, mk_real tar
     }
     /* Without turns L is the straight line g0 + c1 d: Mirtich's step is its root. */
     if (!a->turning && !b->turning) return step;
+    L[0] = bound_fixed(a, b, n, D, V, target);
     /* A plane's support is finite only along its normal, which the fixed axis already follows. */
     if (a->turning && b->s->type != MK_SHAPE_PLANE) L[count++] = bound_turning(a, b, n, D, V, target);
     if (b->turning && a->s->type != MK_SHAPE_PLANE) L[count++] = bound_turning(b, a, mk_v3_neg(n), mk_v3_neg(D), mk_v3_neg(V), target);

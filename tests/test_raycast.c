@@ -11,63 +11,20 @@
 #  define RAY_TOL 1e-12
 #endif
 
-/* ---- a hand-built hull (until quickhull lands): faces as CCW index lists seen from outside ---- */
-typedef struct test_hull {
-    mk_hull h;
-    mk_vec3 v[16];
-    mk_hull_edge e[64];
-    uint16_t fe[16], ve[16];
-    mk_plane pl[16];
-} test_hull;
-
-static void build_hull(test_hull *t, const mk_vec3 *v, int nv, const int faces[][5], int nf)
-{
-    int f, k, ne = 0, i, j;
-    memset(t, 0, sizeof *t);
-    for (i = 0; i < nv; ++i) t->v[i] = v[i];
-    for (f = 0; f < nf; ++f) {
-        int n = faces[f][4] < 0 ? (faces[f][3] < 0 ? 3 : 4) : 5, first = ne;
-        mk_vec3 a = v[faces[f][0]], b = v[faces[f][1]], c = v[faces[f][2]];
-        mk_vec3 nrm = mk_v3_normalize(mk_v3_cross(mk_v3_sub(b, a), mk_v3_sub(c, a)));
-        for (k = 0; k < n; ++k) {
-            t->e[ne].origin = (uint16_t)faces[f][k];
-            t->e[ne].face = (uint16_t)f;
-            t->e[ne].next = (uint16_t)(first + (k + 1) % n);
-            t->ve[faces[f][k]] = (uint16_t)ne;
-            ++ne;
-        }
-        t->fe[f] = (uint16_t)first;
-        t->pl[f].normal = nrm;
-        t->pl[f].offset = mk_v3_dot(nrm, a);
-    }
-    for (i = 0; i < ne; ++i)
-        for (j = 0; j < ne; ++j)
-            if (t->e[i].origin == t->e[t->e[j].next].origin && t->e[j].origin == t->e[t->e[i].next].origin) t->e[i].twin = (uint16_t)j;
-    t->h.vertex_count = nv;
-    t->h.edge_count = ne;
-    t->h.face_count = nf;
-    t->h.vertices = t->v;
-    t->h.edges = t->e;
-    t->h.face_edge = t->fe;
-    t->h.planes = t->pl;
-    t->h.vertex_edge = t->ve;
-    t->h.bounds = mk_aabb_make(v[0], v[0]);
-    for (i = 0; i < nv; ++i) t->h.bounds = mk_aabb_union(t->h.bounds, mk_aabb_make(v[i], v[i]));
-}
-
 /* An irregular octahedron: 6 vertices, 8 triangles. */
-static void make_octahedron(test_hull *t)
+static mk_hull *make_octahedron(void)
 {
-    static const int faces[8][5] = {{0, 2, 4, -1, -1}, {2, 1, 4, -1, -1}, {1, 3, 4, -1, -1}, {3, 0, 4, -1, -1},
-                                    {2, 0, 5, -1, -1}, {1, 2, 5, -1, -1}, {3, 1, 5, -1, -1}, {0, 3, 5, -1, -1}};
     mk_vec3 v[6];
+    mk_hull *h = NULL;
     v[0] = mk_v3(1.2, 0.1, 0);
     v[1] = mk_v3(-0.9, -0.1, 0.05);
     v[2] = mk_v3(0.05, 0.8, -0.1);
     v[3] = mk_v3(0, -1.1, 0);
     v[4] = mk_v3(0.1, 0, 1.3);
     v[5] = mk_v3(-0.1, 0.05, -0.7);
-    build_hull(t, v, 6, faces, 8);
+    MK_ASSERT_STATUS(mk_hull_create(v, 6, NULL, &h), MK_OK);
+    ck_assert_int_eq(h->face_count, 8);
+    return h;
 }
 
 /* ---- the oracle: inside tests written from each solid's definition ---- */
@@ -280,7 +237,7 @@ END_TEST
 START_TEST(plane_and_hull_analytic)
 {
     mk_shape s;
-    test_hull th;
+    mk_hull *hull = make_octahedron();
     mk_transform xf = mk_transform_make(mk_v3(0, 0, 1), mk_quat_identity());
     mk_ray_hit h;
     mk_shape_plane(mk_v3(0, 0, 1), 0.5, &s); /* solid below z = 1.5 in the world */
@@ -290,16 +247,16 @@ START_TEST(plane_and_hull_analytic)
     ck_assert(!cast(&s, xf, mk_v3(3, 4, 5.5), mk_v3(1, 0, 0)).hit);
     ck_assert(!cast(&s, xf, mk_v3(3, 4, 5.5), mk_v3(0, 0, -3.99)).hit);
 
-    make_octahedron(&th);
-    mk_shape_hull(&th.h, 0, &s);
+    mk_shape_hull(hull, 0, &s);
     /* Straight down the z axis onto the top vertex (0.1, 0, 1.3)'s faces. */
     h = cast(&s, mk_transform_identity(), mk_v3(0.1, 0, 5), mk_v3(0, 0, -10));
     MK_ASSERT_NEAR(h.fraction, 3.7 / 10, RAY_TOL);
     check_certificate(&s, mk_transform_identity(), mk_v3(0, 0, -10), &h, 10 * RAY_TOL);
-    mk_shape_hull(&th.h, 0.2, &s); /* rounded: the vertex becomes a ball */
+    mk_shape_hull(hull, 0.2, &s); /* rounded: the vertex becomes a ball */
     h = cast(&s, mk_transform_identity(), mk_v3(0.1, 0, 5), mk_v3(0, 0, -10));
     MK_ASSERT_NEAR(h.fraction, 3.5 / 10, RAY_TOL);
     MK_ASSERT_V3_NEAR(h.normal, mk_v3(0, 0, 1), 10 * RAY_TOL);
+    mk_hull_destroy(hull);
 }
 END_TEST
 
@@ -309,8 +266,7 @@ START_TEST(inside_start_and_degenerate_rays)
     mk_transform id = mk_transform_identity();
     mk_ray_hit h;
     int type;
-    test_hull th;
-    make_octahedron(&th);
+    mk_hull *hull = make_octahedron();
     for (type = 0; type < MK_SHAPE_TYPE_COUNT; ++type) {
         switch (type) {
         case MK_SHAPE_SPHERE: mk_shape_sphere(1, &s); break;
@@ -318,7 +274,7 @@ START_TEST(inside_start_and_degenerate_rays)
         case MK_SHAPE_CAPSULE: mk_shape_capsule(0.5, 1, &s); break;
         case MK_SHAPE_CYLINDER: mk_shape_cylinder(1, 1, 0, &s); break;
         case MK_SHAPE_CONE: mk_shape_cone(1, 1, 0.1, &s); break;
-        case MK_SHAPE_HULL: mk_shape_hull(&th.h, 0, &s); break;
+        case MK_SHAPE_HULL: mk_shape_hull(hull, 0, &s); break;
         default: mk_shape_plane(mk_v3(0, 0, 1), 0.5, &s); break;
         }
         h = cast(&s, id, mk_v3(0, 0, 0.1), mk_v3(0, 0, 4));
@@ -331,6 +287,7 @@ START_TEST(inside_start_and_degenerate_rays)
         ck_assert_msg(!h.hit, "%s: a zero-length ray outside misses", mk_shape_type_name(s.type));
         MK_ASSERT_V3_NEAR(h.point, mk_v3(7, 0, 5), 0);
     }
+    mk_hull_destroy(hull);
 }
 END_TEST
 
@@ -397,8 +354,7 @@ static void random_rays(const mk_shape *s, unsigned seed, int count)
 START_TEST(random_against_oracle)
 {
     mk_shape s;
-    test_hull th;
-    make_octahedron(&th);
+    mk_hull *hull = make_octahedron();
     mk_shape_sphere(0.7, &s);
     random_rays(&s, 1, 60);
     mk_shape_box(mk_v3(1, 0.5, 0.25), 0, &s);
@@ -415,10 +371,11 @@ START_TEST(random_against_oracle)
     random_rays(&s, 7, 60);
     mk_shape_cone(0.7, 0.8, 0.2, &s);
     random_rays(&s, 8, 60);
-    mk_shape_hull(&th.h, 0, &s);
+    mk_shape_hull(hull, 0, &s);
     random_rays(&s, 9, 60);
-    mk_shape_hull(&th.h, 0.25, &s);
+    mk_shape_hull(hull, 0.25, &s);
     random_rays(&s, 10, 60);
+    mk_hull_destroy(hull);
 }
 END_TEST
 

@@ -22,8 +22,7 @@
  * (FAILED, with a t still proven free of contact); sphere pairs and plane
  * pairs run no GJK. Planes may translate but not turn; plane-plane pairs are
  * unsupported. Bad input returns a status and leaves *out untouched. Nothing
- * here allocates; swept bounds and TOI of hulls cost O(vertices) per call on
- * top of the hill-climbing supports.
+ * here allocates.
  */
 #ifndef MINKO_TOI_H
 #define MINKO_TOI_H
@@ -61,7 +60,8 @@ MK_API mk_status mk_sweep_advance(mk_sweep *sw, mk_real t);
  * union of the start and end boxes grown by the largest gap between an arc
  * and its chord (rho * (1 - cos(angle / 2)), rho the shape's bounding radius
  * about the rotation centre), clipped to the box of the moving bounding
- * sphere. Exact for pure translation. Planes cannot move: MK_ERR_UNSUPPORTED. */
+ * sphere (a hull's radius is taken through its centroid). Exact for pure
+ * translation. Planes cannot move: MK_ERR_UNSUPPORTED. */
 MK_API mk_status mk_swept_aabb(const mk_shape *s, const mk_sweep *sw, mk_aabb *out);
 
 typedef enum mk_toi_state {
