@@ -2,7 +2,7 @@
  * against Minko's own GJK + EPA (mk_distance), on the same cases in the same
  * run, so a dispatcher can pick per pair type.
  *
- *   bench_sat [--quick] [--json FILE] [--n CASES] [--reps LOOPS]
+ *   bench_sat [--quick] [--json FILE] [--n CASES] [--reps LOOPS] [--family NAME]
  *
  * Families: box_box, box_hull32, hull8_hull8, hull32_hull32, hull128_hull128
  * (hulls of points on ellipsoids up to 10:1), each "separated" and
@@ -155,15 +155,16 @@ static void measure(int bk, const bcase *cs, int n, int reps, stats *st)
 int main(int argc, char **argv)
 {
     int quick = 0, ncases = 200, reps = 7, i, fam, var, bk;
-    const char *json = NULL;
+    const char *json = NULL, *only = NULL;
     FILE *jf = NULL;
     for (i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--quick")) quick = 1;
         else if (!strcmp(argv[i], "--json") && i + 1 < argc) json = argv[++i];
         else if (!strcmp(argv[i], "--n") && i + 1 < argc) ncases = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--reps") && i + 1 < argc) reps = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--family") && i + 1 < argc) only = argv[++i];
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--n CASES] [--reps LOOPS]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--n CASES] [--reps LOOPS] [--family NAME]\n", argv[0]);
             return 2;
         }
     }
@@ -180,6 +181,7 @@ int main(int argc, char **argv)
         bcase *cs[2];
         mk_hull **owned;
         int have[2] = {0, 0}, tries = 0, no = 0;
+        if (only && strcmp(only, fam_name[fam])) continue;
         r.s = 1000 + (uint64_t)fam;
         cs[0] = calloc((size_t)ncases, sizeof(bcase));
         cs[1] = calloc((size_t)ncases, sizeof(bcase));
