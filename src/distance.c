@@ -3,6 +3,9 @@
 #ifndef MK_WITHOUT_EPA
 #  include "epa.h"
 #endif
+#ifndef MK_WITHOUT_SAT
+#  include "sat.h"
+#endif
 
 const char *mk_method_name(mk_method m)
 {
@@ -19,6 +22,7 @@ typedef enum path {
     PATH_CAPSULE_SPHERE, /* closed form */
     PATH_CAPSULES,       /* closed form: segment-segment */
     PATH_PLANE,          /* closed form: support along the plane normal */
+    PATH_BOX_BOX,        /* SAT's 15 axes when the cores overlap, GJK for the distance otherwise */
     PATH_GJK             /* GJK on the cores, EPA when they overlap */
 } path;
 
@@ -28,7 +32,7 @@ typedef struct route { unsigned char path, swap; } route;
 static const route routes[MK_SHAPE_TYPE_COUNT][MK_SHAPE_TYPE_COUNT] = {
     /*            sphere                    box                   capsule                  cylinder       cone           hull           plane */
     /* sphere */ {R_(SPHERES, 0),          R_(BOX_SPHERE, 1),    R_(CAPSULE_SPHERE, 1),   R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
-    /* box    */ {R_(BOX_SPHERE, 0),       R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
+    /* box    */ {R_(BOX_SPHERE, 0),       R_(BOX_BOX, 0),       R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
     /* capsule*/ {R_(CAPSULE_SPHERE, 0),   R_(GJK, 0),           R_(CAPSULES, 0),         R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
     /* cyl.   */ {R_(GJK, 0),              R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
     /* cone   */ {R_(GJK, 0),              R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
@@ -93,7 +97,8 @@ typedef struct answer {
     mk_solve_state state;
 } answer;
 
-#ifndef MK_WITHOUT_GJK
+#if !defined(MK_WITHOUT_GJK) || !defined(MK_WITHOUT_SAT)
+/* A core answer grown by the rounding radii. */
 static mk_hit grow_core(mk_vec3 a, mk_vec3 b, mk_real dc, mk_vec3 n, const mk_pair *p)
 {
     mk_hit h;
@@ -104,6 +109,18 @@ static mk_hit grow_core(mk_vec3 a, mk_vec3 b, mk_real dc, mk_vec3 n, const mk_pa
     return h;
 }
 
+/* Witness points for a final distance d along n, centred on the solver's
+ * points pa, pb, so that b - a = d n holds to rounding. */
+static void witnesses(mk_vec3 pa, mk_vec3 pb, mk_real d, mk_vec3 n, mk_vec3 *a, mk_vec3 *b)
+{
+    mk_vec3 m = mk_v3_scale(mk_v3_add(pa, pb), MK_REAL(0.5));
+    *a = mk_v3_mad(m, -MK_REAL(0.5) * d, n);
+    *b = mk_v3_mad(m, MK_REAL(0.5) * d, n);
+}
+
+#endif
+
+#ifndef MK_WITHOUT_GJK
 static void weighted(const mk_cso_vertex *v, const mk_real *l, int n, mk_vec3 *a, mk_vec3 *b)
 {
     int k;
@@ -112,15 +129,6 @@ static void weighted(const mk_cso_vertex *v, const mk_real *l, int n, mk_vec3 *a
         *a = mk_v3_mad(*a, l[k], v[k].a);
         *b = mk_v3_mad(*b, l[k], v[k].b);
     }
-}
-
-/* Witness points for a final distance d along n, centred on the solver's
- * points pa, pb, so that b - a = d n holds to rounding. */
-static void witnesses(mk_vec3 pa, mk_vec3 pb, mk_real d, mk_vec3 n, mk_vec3 *a, mk_vec3 *b)
-{
-    mk_vec3 m = mk_v3_scale(mk_v3_add(pa, pb), MK_REAL(0.5));
-    *a = mk_v3_mad(m, -MK_REAL(0.5) * d, n);
-    *b = mk_v3_mad(m, MK_REAL(0.5) * d, n);
 }
 
 /* The reported distance is always sep(n) along the solver's final normal,
@@ -183,6 +191,119 @@ mk_status mk_pair_distance(const mk_pair *p, mk_gjk_cache *cache, mk_hit *out)
 #endif
 }
 
+#ifndef MK_WITHOUT_SAT
+/* The box edge that supports dir when dir is perpendicular to it: the corner
+ * with the signs of dir, spanned along the axis dir has (almost) no part of. */
+static void box_support_edge(mk_vec3 h, mk_vec3 dir, mk_vec3 *e0, mk_vec3 *e1)
+{
+    mk_vec3 c = mk_v3(dir.x >= 0 ? h.x : -h.x, dir.y >= 0 ? h.y : -h.y, dir.z >= 0 ? h.z : -h.z), ad = mk_v3_abs(dir);
+    *e0 = *e1 = c;
+    if (ad.x <= ad.y && ad.x <= ad.z) {
+        e0->x = -h.x;
+        e1->x = h.x;
+    } else if (ad.y <= ad.z) {
+        e0->y = -h.y;
+        e1->y = h.y;
+    } else {
+        e0->z = -h.z;
+        e1->z = h.z;
+    }
+}
+
+static int in_box(mk_vec3 h, mk_vec3 x, mk_real tol)
+{
+    return mk_fabs_(x.x) <= h.x + tol && mk_fabs_(x.y) <= h.y + tol && mk_fabs_(x.z) <= h.z + tol;
+}
+
+static mk_vec3 clamp_box(mk_vec3 h, mk_vec3 x)
+{
+    return mk_v3(mk_clamp(x.x, -h.x, h.x), mk_clamp(x.y, -h.y, h.y), mk_clamp(x.z, -h.z, h.z));
+}
+
+/* Witnesses of a SAT axis n with separation d for one box (half extents hf,
+ * its own frame) and the other box's supporting corner q (same frame): q
+ * moved back by d along n lands on this box's supporting plane; clamped into
+ * the box and still on that plane, it is a surface point. If it had to move
+ * sideways (parallel faces offset, or n an edge axis), the point d along n
+ * from it must be on the other box (half extents ho, x = r_o x_o + t_o).
+ * Returns 1 with two surface points b - a = d n exactly (to tol). Valid for
+ * any axis: the plane and box tests are what make the points witnesses. */
+static int face_witness(mk_vec3 hf, mk_vec3 ho, const mk_mat3 *r_o, mk_vec3 t_o, mk_vec3 q, mk_real d, mk_vec3 n, mk_real tol,
+                        mk_vec3 *on_face, mk_vec3 *on_other)
+{
+    mk_vec3 x0 = mk_v3_mad(q, -d, n), x = clamp_box(hf, x0), y = mk_v3_mad(x, d, n);
+    *on_face = x;
+    *on_other = q;
+    if (!(mk_fabs_(mk_v3_dot(n, mk_v3_sub(x, x0))) <= tol)) return 0; /* clamping left the plane */
+    if (mk_v3_max_abs(mk_v3_sub(q, y)) <= tol) return 1;
+    *on_other = y;
+    return in_box(ho, mk_mat3_tmul_v3(*r_o, mk_v3_sub(y, t_o)), tol);
+}
+
+/* Face witnesses with A, then B, as the box the other's corner projects on. */
+static int face_witnesses(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+{
+    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, qa, qb, tb, nb;
+    mk_mat3 rt;
+    int f = -1;
+    *pb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &f)), p->t);
+    if (face_witness(ha, hb, &p->r, p->t, *pb, d, n, tol, pa, pb)) return 1;
+    /* in B's frame, with B's axes and A's corner */
+    rt = mk_mat3_transpose(p->r);
+    tb = mk_v3_neg(mk_mat3_tmul_v3(p->r, p->t));
+    nb = mk_mat3_tmul_v3(p->r, mk_v3_neg(n));
+    f = -1;
+    qa = mk_v3_add(mk_mat3_mul_v3(rt, mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &f)), tb);
+    if (!face_witness(hb, ha, &rt, tb, qa, d, nb, tol, &qb, &qa)) return 0;
+    *pa = mk_v3_add(mk_mat3_mul_v3(p->r, qa), p->t);
+    *pb = mk_v3_add(mk_mat3_mul_v3(p->r, qb), p->t);
+    return 1;
+}
+
+/* Box cores by SAT's 15 axes (face normals and edge cross products of the
+ * original boxes, about a tenth of GJK + EPA). Its best axis gives a bound
+ * that is exact for overlapping cores; for separated ones it is a lower bound
+ * of the distance. The features supporting that axis (a corner under a face,
+ * two edges) then give two surface points; when they are exactly the SAT
+ * separation apart along the axis they are an upper bound equal to it, and
+ * the answer is certified exact with no GJK: about 70% of random separated
+ * pairs (corner-face and edge-edge closest features), every crossing rod and
+ * every overlapping pair of issue 2's families. Otherwise (vertex-edge
+ * closest features) returns 0 and GJK, then EPA if the cores overlap, answers. */
+static int box_box_sat(const mk_pair *p, answer *ans)
+{
+    mk_sat_options o = mk_sat_defaults();
+    mk_sat_result s;
+    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, n, pa, pb;
+    mk_real tol = 64 * MK_REAL_EPSILON * (mk_v3_max_abs(ha) + mk_v3_max_abs(hb) + mk_v3_max_abs(p->t)), d;
+    int ok = 0;
+    mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
+    d = s.best;
+    n = s.normal;
+    if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
+    if (s.kind == MK_SAT_EDGES) { /* the closest points of the two supporting edges */
+        mk_vec3 a0, a1, b0, b1;
+        mk_real u, v;
+        box_support_edge(ha, n, &a0, &a1);
+        box_support_edge(hb, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &b0, &b1);
+        b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
+        b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
+        mk_segment_segment(a0, a1, b0, b1, &u, &v);
+        pa = mk_v3_lerp(a0, a1, u);
+        pb = mk_v3_lerp(b0, b1, v);
+        ok = mk_v3_max_abs(mk_v3_sub(mk_v3_sub(pb, pa), mk_v3_scale(n, d))) <= tol;
+    }
+    /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
+    if (!ok && !face_witnesses(p, d, n, tol, &pa, &pb)) return 0;
+    witnesses(pa, pb, d, n, &pa, &pb);
+    ans->hit = grow_core(pa, pb, d, n, p);
+    ans->iterations = 15;
+    ans->method = MK_METHOD_SAT;
+    ans->state = MK_SOLVE_CONVERGED;
+    return 1;
+}
+#endif
+
 /* ---- composition ---------------------------------------------------------- */
 
 /* Runs a path in the frame of its first shape: A's rotation goes to *ra for
@@ -217,6 +338,11 @@ MK_ALWAYS_INLINE mk_status run(const mk_shape *a, mk_transform xa, const mk_shap
     p = mk_pair_in(a, *ra, xa.p, b, xb);
     switch (pth) {
     case PATH_PLANE: ans->hit = mk_closest_shape_plane(&p); return MK_OK;
+    case PATH_BOX_BOX: /* pairs SAT cannot certify (or no SAT in this build) go on to GJK */
+#ifndef MK_WITHOUT_SAT
+        if (box_box_sat(&p, ans)) return MK_OK;
+#endif
+        /* fall through */
     case PATH_GJK:
 #ifdef MK_WITHOUT_GJK
         (void)cache;
@@ -302,7 +428,7 @@ mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
         return MK_OK;
     }
 #ifndef MK_WITHOUT_GJK
-    if (rt.path == PATH_GJK) {
+    if (rt.path == PATH_GJK || rt.path == PATH_BOX_BOX) {
         mk_pair p;
         mk_gjk_result g;
         p = mk_pair_make(a, xa, b, xb);

@@ -78,11 +78,33 @@ START_TEST(rounded_shapes_are_exact)
     MK_ASSERT_NEAR(r.distance, sqrt(1.5 * 1.5 + 4 + 6.25) - 0.3, TOL);
     r = dist_ok(&a, xf(0, 0, 0), &b, xf(0, 0, 1.6)); /* cores apart by 0.1, shapes overlap by 0.2 */
     MK_ASSERT_NEAR(r.distance, -0.2, TOL);
-    ck_assert_int_eq(r.method, MK_METHOD_GJK);
+    ck_assert_int_eq(r.method, MK_METHOD_SAT); /* face-face: SAT's bound is certified, no GJK */
     r = dist_ok(&a, xf(0, 0, 0), &b, xf(0, 0, 1.2)); /* cores overlap by 0.3: depth 0.6 */
     MK_ASSERT_NEAR(r.distance, -0.6, TOL);
     MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), TOL);
-    ck_assert_int_eq(r.method, MK_METHOD_EPA);
+    ck_assert_int_eq(r.method, MK_METHOD_SAT); /* overlapping box cores: SAT's 15 axes */
+    {
+        /* the same rounded cores as hulls go through EPA */
+        static const mk_vec3 ca[8] = {{-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {-1, 1, 1}, {1, 1, 1}};
+        mk_vec3 cb[8];
+        mk_hull *hullA = NULL, *hullB = NULL;
+        mk_shape ra, rb;
+        int k;
+        for (k = 0; k < 8; ++k) cb[k] = mk_v3_scale(ca[k], 0.5);
+        MK_ASSERT_STATUS(mk_hull_create(ca, 8, NULL, &hullA), MK_OK);
+        MK_ASSERT_STATUS(mk_hull_create(cb, 8, NULL, &hullB), MK_OK);
+        mk_shape_hull(hullA, 0.2, &ra);
+        mk_shape_hull(hullB, 0.1, &rb);
+        r = dist_ok(&ra, xf(0, 0, 0), &rb, xf(0, 0, 1.6));
+        MK_ASSERT_NEAR(r.distance, -0.2, TOL);
+        ck_assert_int_eq(r.method, MK_METHOD_GJK);
+        r = dist_ok(&ra, xf(0, 0, 0), &rb, xf(0, 0, 1.2));
+        MK_ASSERT_NEAR(r.distance, -0.6, TOL);
+        MK_ASSERT_V3_NEAR(r.normal, mk_v3(0, 0, 1), TOL);
+        ck_assert_int_eq(r.method, MK_METHOD_EPA);
+        mk_hull_destroy(hullA);
+        mk_hull_destroy(hullB);
+    }
 }
 END_TEST
 

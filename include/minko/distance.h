@@ -7,8 +7,10 @@
  * so both shapes placed far from the origin lose no precision beyond what the
  * inputs themselves carry. A dispatch table picks the cheapest exact method for
  * the pair: closed forms for sphere/capsule/box/plane pairs (a sphere-only
- * scene never enters GJK), GJK on the cores for separated shapes, and EPA for
- * penetrating cores. The distance GJK or EPA reports is always re-evaluated
+ * scene never enters GJK); for two boxes, SAT's 15 axes, whose bound is
+ * certified exact by the supporting features (all overlapping pairs, most
+ * separated ones); GJK on the cores for other separated shapes, and EPA for
+ * other penetrating cores. The distance GJK or EPA reports is always re-evaluated
  * with the support functions along the final normal, which for polytopes is
  * the cross product of original feature edges: polytope answers are exact to
  * the rounding of the relative pose, not to a solver tolerance; smooth cores
