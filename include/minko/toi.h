@@ -18,7 +18,8 @@
  * tolerance below the rounding floor (1e4 eps of the pair's size and travel in
  * double, 1e2 eps in float) is raised to it, so 0 asks for the tightest
  * answer. Cost: one GJK on the cores per iteration, warm-started, typically
- * 2 to 4 iterations for translations and 4 to 8 for turns, capped at 64
+ * 2 to 4 iterations for translations and 4 to 8 for turns (parallel edges or
+ * faces of turning shapes converge more slowly), capped at 128
  * (FAILED, with a t still proven free of contact); sphere pairs and plane
  * pairs run no GJK. Planes may translate but not turn; plane-plane pairs are
  * unsupported. Bad input returns a status and leaves *out untouched. Nothing
