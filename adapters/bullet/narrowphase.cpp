@@ -26,7 +26,7 @@ public:
           m_shape0(w0->getCollisionShape()),
           m_config(config)
     {
-        m_cache.kind = m_cache.index_a = m_cache.index_b = 0;
+        m_cache = mk_manifold_cache();  // zeroed: a cold start (minko/manifold.h)
     }
     ~Algorithm() override
     {
