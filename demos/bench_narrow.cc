@@ -113,7 +113,8 @@ struct Backend {
     bool closed_form_ref; // ODE: the yardstick of the closed-form families
     virtual ~Backend() {}
     // Builds per-case data for cases[0..n); false if the backend cannot take one of them.
-    // (Runs in a child process, which exits afterwards: nothing is released.)
+    // Replaces whatever an earlier prepare() built (with --inproc one object
+    // serves every group; in a child process it runs once).
     virtual bool prepare(const std::vector<const mk_case *> &cases) = 0;
     // Answers cases [lo, hi) into out[lo, hi).
     virtual void run(size_t lo, size_t hi, Answer *out) = 0;
@@ -137,6 +138,7 @@ struct Minko : Backend {
     Minko() { name = mk_is_double_precision() ? "minko" : "minko_f32", depth_only = bool_only = closed_form_ref = false; }
     bool prepare(const std::vector<const mk_case *> &cases) override
     {
+        a.clear(), b.clear(), xa.clear(), xb.clear();
         for (const mk_case *c : cases) a.push_back(c->a), b.push_back(c->b), xa.push_back(c->xa), xb.push_back(c->xb);
         return true;
     }
@@ -214,6 +216,7 @@ struct BulletBase : Backend {
     std::vector<double> margin; // sum of the two intrinsic margins (sphere / capsule radii)
     bool prepare(const std::vector<const mk_case *> &cases) override
     {
+        sa.clear(), sb.clear(), ta.clear(), tb.clear(), margin.clear();
         for (const mk_case *c : cases) {
             Geo ga = make_geo(c->a, c->xa, c->oa), gb = make_geo(c->b, c->xb, c->ob);
             double ma, mb;
@@ -350,6 +353,7 @@ struct Ccd : Backend {
     }
     bool prepare(const std::vector<const mk_case *> &cases) override
     {
+        ga.clear(), gb.clear();
         for (const mk_case *c : cases) {
             ga.push_back(make_geo(c->a, c->xa, c->oa));
             gb.push_back(make_geo(c->b, c->xb, c->ob));
@@ -424,6 +428,11 @@ struct Ode : Backend {
     Ode() { name = "ode.dCollide", depth_only = true, bool_only = false, closed_form_ref = true; }
     bool prepare(const std::vector<const mk_case *> &cases) override
     {
+        for (auto &g : ga)
+            if (g->g) dGeomDestroy(g->g);
+        for (auto &g : gb)
+            if (g->g) dGeomDestroy(g->g);
+        ga.clear(), gb.clear();
         for (const mk_case *c : cases) {
             ga.emplace_back(new OdeGeom());
             gb.emplace_back(new OdeGeom());
@@ -784,19 +793,20 @@ void child_answer(Backend &b, const std::vector<const mk_case *> &cs, size_t fro
     }
 }
 
-// Child: best of `reps` timed loops over the cases with good[i] (each loop
-// >= 200 queries; repeats stop once the loops have taken 0.5 s).
-void child_time(Backend &b, const std::vector<const mk_case *> &cs, const std::vector<char> &good, int reps, int fd)
+// Best of `reps` timed loops over the cases with good[i] of a prepared
+// backend (each loop >= 200 queries; repeats stop once the loops have taken
+// 0.5 s), in ns per query.
+double time_good(Backend &b, size_t n, const std::vector<char> &good, int reps)
 {
-    std::vector<Answer> ans(cs.size());
+    std::vector<Answer> ans(n);
     size_t n_good = 0;
     double best = HUGE_VAL, spent = 0;
     for (char g : good) n_good += g;
-    if (!b.prepare(cs) || n_good == 0) return;
+    if (n_good == 0) return NAN;
     auto pass = [&]() {
-        for (size_t lo = 0; lo < cs.size();) {
+        for (size_t lo = 0; lo < n;) {
             size_t hi = lo;
-            while (hi < cs.size() && good[hi]) ++hi;
+            while (hi < n && good[hi]) ++hi;
             if (hi > lo) b.run(lo, hi, ans.data());
             lo = hi + 1;
         }
@@ -809,8 +819,25 @@ void child_time(Backend &b, const std::vector<const mk_case *> &cs, const std::v
         dt = now_ns() - t;
         best = std::min(best, dt), spent += dt;
     }
-    double ns = best / ((double)n_good * inner);
+    return best / ((double)n_good * inner);
+}
+
+void child_time(Backend &b, const std::vector<const mk_case *> &cs, const std::vector<char> &good, int reps, int fd)
+{
+    double ns = b.prepare(cs) ? time_good(b, cs.size(), good, reps) : NAN;
     write_all(fd, &ns, sizeof ns);
+}
+
+// --inproc: the same measurement without child processes, for profilers
+// (valgrind --tool=callgrind); a backend that hangs hangs the run.
+Outcome run_inproc(Backend &b, const std::vector<const mk_case *> &cs, int reps)
+{
+    Outcome o;
+    o.ans.assign(cs.size(), Answer());
+    if (!(o.prepared = b.prepare(cs))) return o;
+    b.run(0, cs.size(), o.ans.data());
+    o.ns = time_good(b, cs.size(), std::vector<char>(cs.size(), 1), reps);
+    return o;
 }
 
 Outcome run_isolated(Backend &b, const std::vector<const mk_case *> &cs, int reps)
@@ -862,7 +889,7 @@ Outcome run_isolated(Backend &b, const std::vector<const mk_case *> &cs, int rep
 // ---- driver ------------------------------------------------------------------------------------------
 
 struct Options {
-    bool quick = false, append = false, selftest = false, list = false, table = false;
+    bool quick = false, append = false, selftest = false, list = false, table = false, inproc = false;
     const char *json = nullptr;
     std::vector<std::string> families, backends;
     int reps = 0, n = 0;
@@ -951,8 +978,9 @@ void usage(const char *argv0)
 {
     std::fprintf(stderr,
                  "usage: %s [--quick] [--table] [--json FILE [--append]] [--family NAME]... [--backend NAME]...\n"
-                 "          [--n N] [--reps N] [--list] [--selftest]\n"
-                 "  --quick: 10 + 10 cases per family, 3 loops, summary only (--table adds every row)\n",
+                 "          [--n N] [--reps N] [--list] [--selftest] [--inproc]\n"
+                 "  --quick: 10 + 10 cases per family, 3 loops, summary only (--table adds every row)\n"
+                 "  --inproc: no child processes (for valgrind --tool=callgrind; a hanging backend hangs the run)\n",
                  argv0);
 }
 
@@ -968,6 +996,7 @@ int main(int argc, char **argv)
         else if (a == "--selftest") o.selftest = true;
         else if (a == "--list") o.list = true;
         else if (a == "--table") o.table = true;
+        else if (a == "--inproc") o.inproc = true;
         else if (a == "--help") {
             usage(argv[0]);
             return 0;
@@ -1027,7 +1056,7 @@ int main(int argc, char **argv)
         for (int i = lo; i < hi; ++i) cs.push_back(&set.cases[i]);
         std::vector<Row> rows;
         for (auto &b : backends) {
-            Outcome out = run_isolated(*b, cs, reps);
+            Outcome out = o.inproc ? run_inproc(*b, cs, reps) : run_isolated(*b, cs, reps);
             if (out.prepared) rows.push_back(measure(*b, cs, out.ans, out.ns));
         }
         report_group(rows, single, table, json, summary);
