@@ -32,6 +32,11 @@
 #include <string>
 #include <vector>
 
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <btBulletCollisionCommon.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
@@ -108,12 +113,21 @@ struct Backend {
     bool closed_form_ref; // ODE: the yardstick of the closed-form families
     virtual ~Backend() {}
     // Builds per-case data for cases[0..n); false if the backend cannot take one of them.
+    // Replaces whatever an earlier prepare() built (with --inproc one object
+    // serves every group; in a child process it runs once).
     virtual bool prepare(const std::vector<const mk_case *> &cases) = 0;
-    virtual void run(Answer *out) = 0;
-    virtual void release() = 0;
+    // Answers cases [lo, hi) into out[lo, hi).
+    virtual void run(size_t lo, size_t hi, Answer *out) = 0;
 };
 
 bool finite3(const double *v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+double now_ns()
+{
+    return (double)std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
 
 // ---- Minko ----------------------------------------------------------------------
 
@@ -124,12 +138,13 @@ struct Minko : Backend {
     Minko() { name = mk_is_double_precision() ? "minko" : "minko_f32", depth_only = bool_only = closed_form_ref = false; }
     bool prepare(const std::vector<const mk_case *> &cases) override
     {
+        a.clear(), b.clear(), xa.clear(), xb.clear();
         for (const mk_case *c : cases) a.push_back(c->a), b.push_back(c->b), xa.push_back(c->xa), xb.push_back(c->xb);
         return true;
     }
-    void run(Answer *out) override
+    void run(size_t lo, size_t hi, Answer *out) override
     {
-        for (size_t i = 0; i < a.size(); ++i) {
+        for (size_t i = lo; i < hi; ++i) {
             mk_distance_result r;
             mk_status st = mk_distance(&a[i], xa[i], &b[i], xb[i], nullptr, &r);
             Answer &o = out[i];
@@ -140,15 +155,14 @@ struct Minko : Backend {
             o.failed = st != MK_OK || !std::isfinite(o.d) || !finite3(o.n);
         }
     }
-    void release() override { a.clear(), b.clear(), xa.clear(), xb.clear(); }
 };
 
 // mk_overlap: the boolean query alone (touching counts as overlapping).
 struct MinkoOverlap : Minko {
     MinkoOverlap() { name += ".overlap", bool_only = true; }
-    void run(Answer *out) override
+    void run(size_t lo, size_t hi, Answer *out) override
     {
-        for (size_t i = 0; i < a.size(); ++i) {
+        for (size_t i = lo; i < hi; ++i) {
             int hit = 0;
             mk_status st = mk_overlap(&a[i], xa[i], &b[i], xb[i], nullptr, &hit);
             out[i].has_d = out[i].has_n = false;
@@ -202,6 +216,7 @@ struct BulletBase : Backend {
     std::vector<double> margin; // sum of the two intrinsic margins (sphere / capsule radii)
     bool prepare(const std::vector<const mk_case *> &cases) override
     {
+        sa.clear(), sb.clear(), ta.clear(), tb.clear(), margin.clear();
         for (const mk_case *c : cases) {
             Geo ga = make_geo(c->a, c->xa, c->oa), gb = make_geo(c->b, c->xb, c->ob);
             double ma, mb;
@@ -215,21 +230,17 @@ struct BulletBase : Backend {
         }
         return true;
     }
-    void release() override
-    {
-        sa.clear(), sb.clear(), ta.clear(), tb.clear(), margin.clear();
-    }
 };
 
 // btGjkPairDetector + btGjkEpaPenetrationDepthSolver, as btConvexConvexAlgorithm
 // uses them: one detector per query, solvers reused.
 struct BulletPair : BulletBase {
     BulletPair() { name = BULLET_TAG ".gjk_pair", depth_only = bool_only = closed_form_ref = false; }
-    void run(Answer *out) override
+    void run(size_t lo, size_t hi, Answer *out) override
     {
         btVoronoiSimplexSolver simplex;
         btGjkEpaPenetrationDepthSolver epa;
-        for (size_t i = 0; i < ta.size(); ++i) {
+        for (size_t i = lo; i < hi; ++i) {
             btGjkPairDetector det(static_cast<btConvexShape *>(sa[i].get()), static_cast<btConvexShape *>(sb[i].get()),
                                   &simplex, &epa);
             btGjkPairDetector::ClosestPointInput in;
@@ -251,9 +262,9 @@ struct BulletPair : BulletBase {
 // btGjkEpaSolver2::SignedDistance: GJK on the cores, EPA if they overlap.
 struct BulletEpa2 : BulletBase {
     BulletEpa2() { name = BULLET_TAG ".gjk_epa2", depth_only = bool_only = closed_form_ref = false; }
-    void run(Answer *out) override
+    void run(size_t lo, size_t hi, Answer *out) override
     {
-        for (size_t i = 0; i < ta.size(); ++i) {
+        for (size_t i = lo; i < hi; ++i) {
             btGjkEpaSolver2::sResults r;
             btVector3 guess = tb[i].getOrigin() - ta[i].getOrigin();
             bool ok = btGjkEpaSolver2::SignedDistance(static_cast<btConvexShape *>(sa[i].get()), ta[i],
@@ -342,15 +353,16 @@ struct Ccd : Backend {
     }
     bool prepare(const std::vector<const mk_case *> &cases) override
     {
+        ga.clear(), gb.clear();
         for (const mk_case *c : cases) {
             ga.push_back(make_geo(c->a, c->xa, c->oa));
             gb.push_back(make_geo(c->b, c->xb, c->ob));
         }
         return true;
     }
-    void run(Answer *out) override
+    void run(size_t lo, size_t hi, Answer *out) override
     {
-        for (size_t i = 0; i < ga.size(); ++i) {
+        for (size_t i = lo; i < hi; ++i) {
             Answer &a = out[i];
             ccd_real_t depth = 0;
             ccd_vec3_t dir, pos;
@@ -367,7 +379,6 @@ struct Ccd : Backend {
             a.failed = a.has_d && (!std::isfinite(a.d) || !finite3(a.n));
         }
     }
-    void release() override { ga.clear(), gb.clear(); }
 };
 
 // ---- ODE 0.16 ----------------------------------------------------------------------------
@@ -417,6 +428,11 @@ struct Ode : Backend {
     Ode() { name = "ode.dCollide", depth_only = true, bool_only = false, closed_form_ref = true; }
     bool prepare(const std::vector<const mk_case *> &cases) override
     {
+        for (auto &g : ga)
+            if (g->g) dGeomDestroy(g->g);
+        for (auto &g : gb)
+            if (g->g) dGeomDestroy(g->g);
+        ga.clear(), gb.clear();
         for (const mk_case *c : cases) {
             ga.emplace_back(new OdeGeom());
             gb.emplace_back(new OdeGeom());
@@ -425,10 +441,10 @@ struct Ode : Backend {
         }
         return true;
     }
-    void run(Answer *out) override
+    void run(size_t lo, size_t hi, Answer *out) override
     {
         dContactGeom contacts[16];
-        for (size_t i = 0; i < ga.size(); ++i) {
+        for (size_t i = lo; i < hi; ++i) {
             int n = dCollide(ga[i]->g, gb[i]->g, 16, contacts, sizeof contacts[0]);
             Answer &a = out[i];
             int deepest = 0;
@@ -441,14 +457,6 @@ struct Ode : Backend {
             for (int k = 0; k < 3; ++k) a.n[k] = n > 0 ? -contacts[deepest].normal[k] : 0;
             a.failed = n < 0 || (n > 0 && (!std::isfinite(a.d) || !finite3(a.n)));
         }
-    }
-    void release() override
-    {
-        for (auto &g : ga)
-            if (g->g) dGeomDestroy(g->g);
-        for (auto &g : gb)
-            if (g->g) dGeomDestroy(g->g);
-        ga.clear(), gb.clear();
     }
 };
 
@@ -702,20 +710,190 @@ void scoreboard(const std::vector<Row> &all)
     }
 }
 
+// ---- isolation: each backend answers in child processes -------------------------
+//
+// A competitor may never return (libccd's EPA has no iteration cap and can
+// creep forever at a tight tolerance) or crash (libccd #68: touching boxes).
+// So every backend answers a group in a forked child that streams one answer
+// per case through a pipe; if a case takes more than 2 s or the child dies,
+// the parent kills it, counts that case as a failure (hang or crash) and
+// starts a fresh child at the next case. A last child times the group over
+// the cases that answered. Nothing here ever continues inside a process a
+// library call was interrupted in.
+
+const double CASE_TIMEOUT_MS = 2000;
+
+bool write_all(int fd, const void *p, size_t n)
+{
+    const char *c = static_cast<const char *>(p);
+    while (n > 0) {
+        ssize_t k = write(fd, c, n);
+        if (k <= 0) return false;
+        c += k, n -= (size_t)k;
+    }
+    return true;
+}
+
+// Reads n bytes within timeout_ms; false on timeout, EOF or error.
+bool read_all(int fd, void *p, size_t n, double timeout_ms)
+{
+    char *c = static_cast<char *>(p);
+    double end = now_ns() + timeout_ms * 1e6;
+    while (n > 0) {
+        struct pollfd pf = {fd, POLLIN, 0};
+        double left = (end - now_ns()) * 1e-6;
+        if (left <= 0 || poll(&pf, 1, (int)left + 1) <= 0) return false;
+        ssize_t k = read(fd, c, n);
+        if (k <= 0) return false;
+        c += k, n -= (size_t)k;
+    }
+    return true;
+}
+
+pid_t spawn(int *rfd)
+{
+    int fd[2];
+    if (pipe(fd)) return -1;
+    std::fflush(stdout);
+    std::fflush(stderr);
+    pid_t pid = fork();
+    if (pid == 0) {
+        close(fd[0]);
+        *rfd = fd[1];
+        return 0;
+    }
+    close(fd[1]);
+    *rfd = fd[0];
+    if (pid < 0) close(fd[0]);
+    return pid;
+}
+
+void reap(pid_t pid, int fd)
+{
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+    close(fd);
+}
+
+struct Outcome {
+    bool prepared = false;
+    double ns = NAN;           // per query, over the cases that answered
+    std::vector<Answer> ans;   // failed = true for a hang or crash
+};
+
+// Child: answer cases [from, n) one by one, streaming (index, answer).
+void child_answer(Backend &b, const std::vector<const mk_case *> &cs, size_t from, int fd)
+{
+    int ok = b.prepare(cs);
+    if (!write_all(fd, &ok, sizeof ok) || !ok) return;
+    std::vector<Answer> ans(cs.size());
+    for (size_t i = from; i < cs.size(); ++i) {
+        b.run(i, i + 1, ans.data());
+        if (!write_all(fd, &i, sizeof i) || !write_all(fd, &ans[i], sizeof ans[i])) return;
+    }
+}
+
+// Best of `reps` timed loops over the cases with good[i] of a prepared
+// backend (each loop >= 200 queries; repeats stop once the loops have taken
+// 0.5 s), in ns per query.
+double time_good(Backend &b, size_t n, const std::vector<char> &good, int reps)
+{
+    std::vector<Answer> ans(n);
+    size_t n_good = 0;
+    double best = HUGE_VAL, spent = 0;
+    for (char g : good) n_good += g;
+    if (n_good == 0) return NAN;
+    auto pass = [&]() {
+        for (size_t lo = 0; lo < n;) {
+            size_t hi = lo;
+            while (hi < n && good[hi]) ++hi;
+            if (hi > lo) b.run(lo, hi, ans.data());
+            lo = hi + 1;
+        }
+    };
+    int inner = (int)((200 + n_good - 1) / n_good);
+    pass(); // warm-up
+    for (int r = 0; r < reps && (r == 0 || spent < 5e8); ++r) {
+        double t = now_ns(), dt;
+        for (int k = 0; k < inner; ++k) pass();
+        dt = now_ns() - t;
+        best = std::min(best, dt), spent += dt;
+    }
+    return best / ((double)n_good * inner);
+}
+
+void child_time(Backend &b, const std::vector<const mk_case *> &cs, const std::vector<char> &good, int reps, int fd)
+{
+    double ns = b.prepare(cs) ? time_good(b, cs.size(), good, reps) : NAN;
+    write_all(fd, &ns, sizeof ns);
+}
+
+// --inproc: the same measurement without child processes, for profilers
+// (valgrind --tool=callgrind); a backend that hangs hangs the run.
+Outcome run_inproc(Backend &b, const std::vector<const mk_case *> &cs, int reps)
+{
+    Outcome o;
+    o.ans.assign(cs.size(), Answer());
+    if (!(o.prepared = b.prepare(cs))) return o;
+    b.run(0, cs.size(), o.ans.data());
+    o.ns = time_good(b, cs.size(), std::vector<char>(cs.size(), 1), reps);
+    return o;
+}
+
+Outcome run_isolated(Backend &b, const std::vector<const mk_case *> &cs, int reps)
+{
+    Outcome o;
+    std::vector<char> good(cs.size(), 1);
+    o.ans.assign(cs.size(), Answer());
+    for (size_t next = 0; next < cs.size();) {
+        int fd, ok = 0;
+        pid_t pid = spawn(&fd);
+        if (pid == 0) {
+            child_answer(b, cs, next, fd);
+            _exit(0);
+        }
+        if (pid < 0) break;
+        if (!read_all(fd, &ok, sizeof ok, 60000) || !ok) {
+            reap(pid, fd);
+            if (!ok) return o; // the backend does not take this group
+            break;
+        }
+        o.prepared = true;
+        for (;;) {
+            size_t i;
+            Answer a;
+            if (!read_all(fd, &i, sizeof i, CASE_TIMEOUT_MS) || !read_all(fd, &a, sizeof a, 1000)) {
+                o.ans[next] = Answer(), o.ans[next].failed = true, good[next] = 0; // hung or crashed
+                ++next;
+                break;
+            }
+            o.ans[i] = a;
+            next = i + 1;
+            if (next == cs.size()) break;
+        }
+        reap(pid, fd);
+    }
+    int fd;
+    pid_t pid = spawn(&fd);
+    if (pid == 0) {
+        child_time(b, cs, good, reps, fd);
+        _exit(0);
+    }
+    if (pid > 0) {
+        if (!read_all(fd, &o.ns, sizeof o.ns, 600000)) o.ns = NAN;
+        reap(pid, fd);
+    }
+    return o;
+}
+
 // ---- driver ------------------------------------------------------------------------------------------
 
 struct Options {
-    bool quick = false, append = false, selftest = false, list = false, table = false;
+    bool quick = false, append = false, selftest = false, list = false, table = false, inproc = false;
     const char *json = nullptr;
     std::vector<std::string> families, backends;
     int reps = 0, n = 0;
 };
-
-double now_ns()
-{
-    return (double)std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-}
 
 std::vector<std::unique_ptr<Backend>> make_backends(const Options &o)
 {
@@ -777,9 +955,9 @@ int selftest(std::vector<std::unique_ptr<Backend>> &backends)
     for (int i = 0; i < set.count; ++i)
         if (!std::strcmp(set.cases[i].variant, "libccd17_5m_vs_0.2m")) cs.push_back(&set.cases[i]);
     for (auto &b : backends) {
-        std::vector<Answer> ans(cs.size());
-        if (!b->prepare(cs)) continue;
-        b->run(ans.data());
+        Outcome out = run_isolated(*b, cs, 1);
+        const std::vector<Answer> &ans = out.ans;
+        if (!out.prepared) continue;
         for (size_t i = 0; i < cs.size(); ++i) {
             const Answer &a = ans[i];
             const mk_case &c = *cs[i];
@@ -791,7 +969,6 @@ int selftest(std::vector<std::unique_ptr<Backend>> &backends)
                         a.has_d ? a.d : NAN, c.distance, a.n[0], a.n[1], a.n[2], ok ? "ok" : "WRONG");
             bad += !ok;
         }
-        b->release();
     }
     mk_case_set_free(&set);
     return bad != 0;
@@ -801,8 +978,9 @@ void usage(const char *argv0)
 {
     std::fprintf(stderr,
                  "usage: %s [--quick] [--table] [--json FILE [--append]] [--family NAME]... [--backend NAME]...\n"
-                 "          [--n N] [--reps N] [--list] [--selftest]\n"
-                 "  --quick: 10 + 10 cases per family, 3 loops, summary only (--table adds every row)\n",
+                 "          [--n N] [--reps N] [--list] [--selftest] [--inproc]\n"
+                 "  --quick: 10 + 10 cases per family, 3 loops, summary only (--table adds every row)\n"
+                 "  --inproc: no child processes (for valgrind --tool=callgrind; a hanging backend hangs the run)\n",
                  argv0);
 }
 
@@ -818,6 +996,7 @@ int main(int argc, char **argv)
         else if (a == "--selftest") o.selftest = true;
         else if (a == "--list") o.list = true;
         else if (a == "--table") o.table = true;
+        else if (a == "--inproc") o.inproc = true;
         else if (a == "--help") {
             usage(argv[0]);
             return 0;
@@ -853,7 +1032,9 @@ int main(int argc, char **argv)
         std::fprintf(stderr, "bench_narrow: case generation failed\n");
         return 1;
     }
-    std::printf("bench_narrow (%s build): %d cases with exact references in %.1f s; best of %d loops per group\n",
+    std::printf("bench_narrow (%s build): %d cases with exact references in %.1f s; best of %d loops per group and backend\n"
+                "(fewer once a backend's loops pass 0.5 s); each backend runs in child processes: a case that hangs (> 2 s)\n"
+                "or crashes counts as a failure and is left out of the timing\n",
                 single ? "float" : "double", set.count, (now_ns() - t0) * 1e-9, reps);
     FILE *json = nullptr;
     if (o.json && !(json = std::fopen(o.json, o.append ? "a" : "w"))) {
@@ -875,24 +1056,11 @@ int main(int argc, char **argv)
         for (int i = lo; i < hi; ++i) cs.push_back(&set.cases[i]);
         std::vector<Row> rows;
         for (auto &b : backends) {
-            std::vector<Answer> ans(cs.size());
-            if (!b->prepare(cs)) {
-                b->release();
-                continue;
-            }
-            b->run(ans.data()); // warm-up, and the answers judged below
-            // Small groups (the regression cases) loop over themselves so a timed loop is >= 1000 queries.
-            int inner = (int)((1000 + cs.size() - 1) / cs.size());
-            double best = HUGE_VAL;
-            for (int r = 0; r < reps; ++r) {
-                double t = now_ns();
-                for (int k = 0; k < inner; ++k) b->run(ans.data());
-                best = std::min(best, now_ns() - t);
-            }
-            b->release();
-            rows.push_back(measure(*b, cs, ans, best / ((double)cs.size() * inner)));
+            Outcome out = o.inproc ? run_inproc(*b, cs, reps) : run_isolated(*b, cs, reps);
+            if (out.prepared) rows.push_back(measure(*b, cs, out.ans, out.ns));
         }
         report_group(rows, single, table, json, summary);
+        std::fflush(stdout);
         all.insert(all.end(), rows.begin(), rows.end());
         lo = hi;
     }

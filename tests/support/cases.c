@@ -15,10 +15,13 @@
 struct mk_case_store {
     mk_oracle_shape **shapes;
     int count, cap;
+    mk_hull **hulls;
+    int nhulls, hcap;
 };
 
 static const char *const family_names[MK_FAM_COUNT] = {
-    "sphere_sphere", "box_sphere", "capsule_capsule", "box_box", "flat_boxes", "thin_rods",
+    "sphere_sphere", "box_sphere", "capsule_capsule", "box_box", "hull_hull_8", "hull_hull_32", "hull_hull_128",
+    "hull_box", "flat_boxes", "thin_rods",
     "large_coords", "tiny", "nearly_touching", "parallel_faces", "deep"};
 
 const char *mk_family_name(mk_family f) { return (unsigned)f < MK_FAM_COUNT ? family_names[f] : "unknown"; }
@@ -30,29 +33,55 @@ int mk_family_closed_form(mk_family f)
 
 /* ---- storage --------------------------------------------------------------- */
 
-static int own_shape(mk_case_set *set, const mk_shape *s, const mk_oracle_shape **out)
+static struct mk_case_store *store_of(mk_case_set *set)
 {
-    struct mk_case_store *st = set->store;
-    mk_oracle_shape *o;
-    if (!st) {
-        st = set->store = calloc(1, sizeof *st);
-        if (!st) return -1;
-    }
-    if (st->count == st->cap) {
+    if (!set->store) set->store = calloc(1, sizeof *set->store);
+    return set->store;
+}
+
+/* Takes ownership of an initialised oracle shape (freed on failure). */
+static int keep_shape(mk_case_set *set, mk_oracle_shape *o, const mk_oracle_shape **out)
+{
+    struct mk_case_store *st = store_of(set);
+    if (st && st->count == st->cap) {
         int cap = st->cap ? 2 * st->cap : 64;
         mk_oracle_shape **p = realloc(st->shapes, sizeof *p * (size_t)cap);
-        if (!p) return -1;
-        st->shapes = p;
-        st->cap = cap;
+        if (p) st->shapes = p, st->cap = cap;
     }
-    o = malloc(sizeof *o);
-    if (!o || mk_oracle_shape_init(o, s)) {
-        if (o) mk_oracle_shape_free(o);
+    if (!st || st->count == st->cap) {
+        mk_oracle_shape_free(o);
         free(o);
         return -1;
     }
     st->shapes[st->count++] = o;
     *out = o;
+    return 0;
+}
+
+static int own_shape(mk_case_set *set, const mk_shape *s, const mk_oracle_shape **out)
+{
+    mk_oracle_shape *o = malloc(sizeof *o);
+    if (!o || mk_oracle_shape_init(o, s)) {
+        if (o) mk_oracle_shape_free(o);
+        free(o);
+        return -1;
+    }
+    return keep_shape(set, o, out);
+}
+
+static int keep_hull(mk_case_set *set, mk_hull *h)
+{
+    struct mk_case_store *st = store_of(set);
+    if (st && st->nhulls == st->hcap) {
+        int cap = st->hcap ? 2 * st->hcap : 16;
+        mk_hull **p = realloc(st->hulls, sizeof *p * (size_t)cap);
+        if (p) st->hulls = p, st->hcap = cap;
+    }
+    if (!st || st->nhulls == st->hcap) {
+        mk_hull_destroy(h);
+        return -1;
+    }
+    st->hulls[st->nhulls++] = h;
     return 0;
 }
 
@@ -84,7 +113,12 @@ void mk_case_set_free(mk_case_set *set)
 {
     if (!set) return;
     release_since(set, 0);
-    if (set->store) free(set->store->shapes);
+    if (set->store) {
+        int i;
+        for (i = 0; i < set->store->nhulls; ++i) mk_hull_destroy(set->store->hulls[i]);
+        free(set->store->hulls);
+        free(set->store->shapes);
+    }
     free(set->store);
     free(set->cases);
     memset(set, 0, sizeof *set);
@@ -92,7 +126,15 @@ void mk_case_set_free(mk_case_set *set)
 
 /* ---- float-rounded random inputs ------------------------------------------ */
 
-static double f32(double x) { return (double)(float)x; }
+/* Rounds to float. The volatile is not decoration: GCC 12.2 at -O2 SLP-
+ * vectorises (double)(float)a for two lanes of a vector and drops the round
+ * trip (cvtpd2ps/cvtps2pd never emitted), so plain casts silently left hull
+ * points unrounded while the long double copies were rounded. */
+static double f32(double x)
+{
+    volatile float f = (float)x;
+    return (double)f;
+}
 static double rnd(mk_rng *r, double lo, double hi) { return mk_rng_range(r, lo, hi); }
 
 typedef struct dv3 { double x, y, z; } dv3;
@@ -146,7 +188,13 @@ static dv3 rand_half(mk_rng *r, double lo, double hi) { return d3(rnd(r, lo, hi)
 
 /* ---- judging ------------------------------------------------------------------ */
 
-typedef struct cand { mk_shape a, b; mk_transform xa, xb; } cand;
+/* A candidate; oa / ob are the judge's shapes when they already exist (pool
+ * hulls), else judge() builds them from a / b. */
+typedef struct cand {
+    mk_shape a, b;
+    mk_transform xa, xb;
+    const mk_oracle_shape *oa, *ob;
+} cand;
 
 /* Runs the oracle on a candidate and fills a case; the shapes stay owned. */
 static int judge(mk_case_set *set, const cand *c, mk_case *out)
@@ -154,7 +202,9 @@ static int judge(mk_case_set *set, const cand *c, mk_case *out)
     mk_oracle_pose pa = mk_oracle_pose_of(c->xa), pb = mk_oracle_pose_of(c->xb);
     mk_oracle_result r;
     memset(out, 0, sizeof *out);
-    if (own_shape(set, &c->a, &out->oa) || own_shape(set, &c->b, &out->ob)) return -1;
+    out->oa = c->oa;
+    out->ob = c->ob;
+    if ((!out->oa && own_shape(set, &c->a, &out->oa)) || (!out->ob && own_shape(set, &c->b, &out->ob))) return -1;
     if (mk_oracle_query(out->oa, &pa, out->ob, &pb, 0, &r)) return -1;
     out->a = c->a;
     out->b = c->b;
@@ -273,9 +323,95 @@ static void gen_deep(mk_rng *r, int pen, cand *c)
     c->xb = xf(d3add(pa, d3scale(rand_dir(r), rho)), rand_quat(r));
 }
 
-static void gen_candidate(mk_family f, mk_rng *r, int pen, cand *c)
+/* ---- hulls -------------------------------------------------------------------- */
+
+#define HULL_POOL 6
+
+typedef struct hull_pool {
+    mk_shape shape[HULL_POOL];
+    const mk_oracle_shape *o[HULL_POOL];
+} hull_pool;
+
+/* Surface area of an ellipsoid (Thomsen's formula, ~1 %): sets the spacing. */
+static double ellipsoid_area(double a, double b, double c)
 {
+    double p = 1.6075, t = (pow(a * b, p) + pow(a * c, p) + pow(b * c, p)) / 3;
+    return 4 * 3.141592653589793 * pow(t, 1 / p);
+}
+
+/* n float-rounded points on an ellipsoid with semi-axes (1, b, c) x scale,
+ * b, c in [0.1, 1], no two closer than a third of the mean spacing, so every
+ * point is a vertex by a wide margin; the oracle must agree (else redraw). */
+static int make_hull(mk_case_set *set, mk_rng *r, int n, mk_shape *shape, const mk_oracle_shape **o)
+{
+    mk_lvec3 lp[128];
+    mk_vec3 mp[128];
+    int attempt;
+    for (attempt = 0; attempt < 20; ++attempt) {
+        double sc = rnd(r, 0.5, 1), ax[3] = {sc, sc * rnd(r, 0.1, 1), sc * rnd(r, 0.1, 1)};
+        double gap = sqrt(ellipsoid_area(ax[0], ax[1], ax[2]) / n) / 3;
+        int k = 0, tries = 0, i;
+        mk_oracle_shape *os;
+        mk_hull *h = NULL;
+        while (k < n && tries++ < 10000 * n) {
+            dv3 d = rand_dir(r), p = d3f32(d3(d.x * ax[0], d.y * ax[1], d.z * ax[2]));
+            for (i = 0; i < k; ++i)
+                if (d3len(d3((double)lp[i].x - p.x, (double)lp[i].y - p.y, (double)lp[i].z - p.z)) < gap) break;
+            if (i < k) continue;
+            lp[k].x = p.x, lp[k].y = p.y, lp[k].z = p.z;
+            mp[k++] = to_mk(p);
+        }
+        if (k < n || !(os = malloc(sizeof *os))) continue;
+        if (mk_oracle_shape_points(os, lp, n, 0) || os->core.nv != n) {
+            mk_oracle_shape_free(os);
+            free(os);
+            continue;
+        }
+        if (keep_shape(set, os, o)) return -1;
+        /* Quickhull must take the same cloud; a refusal is a library bug worth failing on. */
+        if (mk_hull_create(mp, n, NULL, &h) != MK_OK || keep_hull(set, h)) return -1;
+        return mk_shape_hull(h, 0, shape) == MK_OK ? 0 : -1;
+    }
+    return -1;
+}
+
+static int make_pool(mk_case_set *set, mk_rng *r, int n, hull_pool *pool)
+{
+    int i;
+    for (i = 0; i < HULL_POOL; ++i)
+        if (make_hull(set, r, n, &pool->shape[i], &pool->o[i])) return -1;
+    return 0;
+}
+
+static int hull_points(mk_family f) { return f == MK_FAM_HULL_8 ? 8 : f == MK_FAM_HULL_128 ? 128 : 32; }
+
+/* A pool hull for A; B another pool hull, or a box for hull_box. */
+static void gen_hulls(mk_rng *r, const hull_pool *pool, int with_box, cand *c)
+{
+    int i = (int)(mk_rng_unit(r) * HULL_POOL), j = (int)(mk_rng_unit(r) * HULL_POOL);
+    double ra = (double)pool->o[i]->size, rb;
+    c->a = pool->shape[i];
+    c->oa = pool->o[i];
+    if (with_box) {
+        dv3 h = rand_half(r, 0.1, 1);
+        c->b = box(h);
+        rb = box_radius(h);
+    } else {
+        c->b = pool->shape[j];
+        c->ob = pool->o[j];
+        rb = (double)pool->o[j]->size;
+    }
+    place_pair(r, c, 1.2 * (ra + rb), 1, 1, d3(0, 0, 0));
+}
+
+static void gen_candidate(mk_family f, mk_rng *r, int pen, const hull_pool *pool, cand *c)
+{
+    c->oa = c->ob = NULL;
     switch (f) {
+    case MK_FAM_HULL_8:
+    case MK_FAM_HULL_32:
+    case MK_FAM_HULL_128: gen_hulls(r, pool, 0, c); break;
+    case MK_FAM_HULL_BOX: gen_hulls(r, pool, 1, c); break;
     case MK_FAM_SPHERE_SPHERE: gen_spheres(r, pen, c); break;
     case MK_FAM_BOX_SPHERE: gen_box_sphere(r, c); break;
     case MK_FAM_CAPSULE_CAPSULE: gen_capsules(r, c); break;
@@ -302,6 +438,7 @@ static int nearly_touching(mk_case_set *set, mk_case *k, int pen)
     cand c;
     c.a = k->a;
     c.b = k->b;
+    c.oa = c.ob = NULL;
     c.xa = k->xa;
     c.xb = xf(d3add(pb, d3(step * k->normal[0], step * k->normal[1], step * k->normal[2])), k->xb.q);
     return judge(set, &c, k);
@@ -320,19 +457,26 @@ static int wanted(mk_family f, const mk_case *k, int pen)
     }
 }
 
+static int is_hull_family(mk_family f)
+{
+    return f == MK_FAM_HULL_8 || f == MK_FAM_HULL_32 || f == MK_FAM_HULL_128 || f == MK_FAM_HULL_BOX;
+}
+
 int mk_cases_add_family(mk_case_set *set, mk_family f, int separated, int penetrating, uint64_t seed)
 {
     mk_rng rng;
+    hull_pool pool;
     int pen, made, tries;
     if ((unsigned)f >= MK_FAM_COUNT) return -1;
     rng.s = seed * 0x9E3779B97F4A7C15ull + (uint64_t)f;
+    if (is_hull_family(f) && make_pool(set, &rng, hull_points(f), &pool)) return -1;
     for (pen = 0; pen < 2; ++pen)
         for (made = 0, tries = 0; made < (pen ? penetrating : separated); ++tries) {
             int mark = set->store ? set->store->count : 0, ok;
             cand c;
             mk_case k;
             if (tries > 1000 * ((pen ? penetrating : separated) + 10)) return -1;
-            gen_candidate(f, &rng, pen, &c);
+            gen_candidate(f, &rng, pen, &pool, &c);
             ok = judge(set, &c, &k) == 0;
             if (ok && f == MK_FAM_NEARLY_TOUCHING) {
                 ok = k.distance > 1e-2 * k.size; /* start from a clear gap */
@@ -365,6 +509,7 @@ static int add_fixed(mk_case_set *set, const char *name, const cand *c)
 static cand box_pair(double ha, mk_transform xa, double hb, mk_transform xb)
 {
     cand c;
+    c.oa = c.ob = NULL;
     mk_shape_box(mk_v3((mk_real)ha, (mk_real)ha, (mk_real)ha), 0, &c.a);
     mk_shape_box(mk_v3((mk_real)hb, (mk_real)hb, (mk_real)hb), 0, &c.b);
     c.xa = xa;

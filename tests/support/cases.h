@@ -14,6 +14,9 @@
  * tenth of their width; touching is a family of its own). `size` is the larger bounding radius of the two solids, the scale of
  * the nearly-touching family's absolute error. Memory: the set owns its cases,
  * oracle shapes and hulls (malloc); free it with mk_case_set_free.
+ * Hull families draw from a pool of six hulls per call, built by
+ * mk_hull_create from well-spaced points (every point a vertex) while the
+ * oracle rebuilds each hull from the same points by brute force.
  * Complexity: generation is dominated by the oracle (boxes ~0.1 ms a case,
  * 128-vertex hulls ~10 ms).
  */
@@ -29,6 +32,10 @@ typedef enum mk_family {
     MK_FAM_BOX_SPHERE,
     MK_FAM_CAPSULE_CAPSULE,
     MK_FAM_BOX_BOX,
+    MK_FAM_HULL_8,          /* hulls of 8 / 32 / 128 points on ellipsoids, axis ratio up to 10 */
+    MK_FAM_HULL_32,
+    MK_FAM_HULL_128,
+    MK_FAM_HULL_BOX,        /* 32-point hull against a box */
     MK_FAM_FLAT_BOXES,      /* 1 x 1 x 1e-3 plates */
     MK_FAM_THIN_RODS,       /* 100 x 0.01 x 0.01 rods crossing */
     MK_FAM_LARGE_COORDS,    /* box pairs, both offset by ~1e5 */

@@ -232,12 +232,15 @@ static void poly_free(mk_oracle_poly *P)
     free(P->fr);
     free(P->ev);
     free(P->ef);
+    free(P->probe);
     memset(P, 0, sizeof *P);
 }
 
-static void poly_finish(mk_oracle_poly *P)
+/* Centroid, radius, and the probe vertices: the support of each of the 26
+ * directions (-1, 0, 1)^3 \ 0, without repeats. */
+static int poly_finish(mk_oracle_poly *P)
 {
-    int i;
+    int i, dx, dy, dz;
     P->centroid = lv(0, 0, 0);
     P->radius = 0;
     for (i = 0; i < P->nv; ++i) {
@@ -245,6 +248,21 @@ static void poly_finish(mk_oracle_poly *P)
         if (llen(P->v[i]) > P->radius) P->radius = llen(P->v[i]);
     }
     P->centroid = lscale(P->centroid, 1.0L / (long double)P->nv);
+    P->probe = malloc(sizeof *P->probe * 26);
+    if (!P->probe) return -1;
+    P->nprobe = 0;
+    for (dx = -1; dx <= 1; ++dx)
+        for (dy = -1; dy <= 1; ++dy)
+            for (dz = -1; dz <= 1; ++dz) {
+                mk_lvec3 d = lv(dx, dy, dz);
+                int best = 0, k;
+                if (!dx && !dy && !dz) continue;
+                for (i = 1; i < P->nv; ++i)
+                    if (ldot(d, P->v[i]) > ldot(d, P->v[best])) best = i;
+                for (k = 0; k < P->nprobe && P->probe[k] != best; ++k) continue;
+                if (k == P->nprobe) P->probe[P->nprobe++] = best;
+            }
+    return 0;
 }
 
 /* Edges from the face loops: each directed edge must meet exactly one
@@ -324,8 +342,7 @@ static int poly_from_tmp(mk_oracle_poly *P, const hull_tmp *h, const mk_lvec3 *p
         P->fr[f] = r;
     }
     free(map);
-    poly_finish(P);
-    return poly_edges(P);
+    return poly_finish(P) ? -1 : poly_edges(P);
 }
 
 static int poly_hull(mk_oracle_poly *P, const mk_lvec3 *p, int n)
@@ -371,7 +388,10 @@ static int poly_segment(mk_oracle_poly *P, long double half_height)
     P->ev[0][0] = 0;
     P->ev[0][1] = 1;
     P->ef[0][0] = P->ef[0][1] = -1;
-    poly_finish(P);
+    if (poly_finish(P)) {
+        poly_free(P);
+        return -1;
+    }
     return 0;
 }
 
@@ -461,6 +481,7 @@ typedef struct view {
     mk_lvec3 *v, *fn, *fc;    /* placed vertices, normals, face centroids */
     mk_lvec3 *em, *ek;        /* edge midpoints, Gauss-arc plane normals fn0 x fn1 */
     long double *eh;          /* edge half lengths */
+    double (*fn_d)[3], (*ek_d)[3]; /* double copies for the Gauss-map pre-filter */
     mk_lvec3 centroid;
 } view;
 
@@ -468,6 +489,7 @@ static void view_free(view *w)
 {
     free(w->v);
     free(w->eh);
+    free(w->fn_d);
     memset(w, 0, sizeof *w);
 }
 
@@ -481,10 +503,12 @@ static int view_make(view *w, const mk_oracle_poly *p, const long double (*r)[3]
     w->p = p;
     w->v = malloc(sizeof *w->v * (size_t)(n > 0 ? n : 1));
     w->eh = malloc(sizeof *w->eh * (size_t)(p->ne > 0 ? p->ne : 1));
-    if (!w->v || !w->eh) {
+    w->fn_d = malloc(sizeof *w->fn_d * (size_t)(p->nf + p->ne + 1));
+    if (!w->v || !w->eh || !w->fn_d) {
         view_free(w);
         return -1;
     }
+    w->ek_d = w->fn_d + p->nf;
     w->fn = w->v + p->nv;
     w->fc = w->fn + p->nf;
     w->em = w->fc + p->nf;
@@ -499,7 +523,10 @@ static int view_make(view *w, const mk_oracle_poly *p, const long double (*r)[3]
         w->em[i] = lscale(ladd(a, b), 0.5L);
         w->eh[i] = 0.5L * llen(lsub(b, a));
         w->ek[i] = p->ef[i][0] >= 0 ? lcross(w->fn[p->ef[i][0]], w->fn[p->ef[i][1]]) : lv(0, 0, 0);
+        w->ek_d[i][0] = (double)w->ek[i].x, w->ek_d[i][1] = (double)w->ek[i].y, w->ek_d[i][2] = (double)w->ek[i].z;
     }
+    for (i = 0; i < p->nf; ++i)
+        w->fn_d[i][0] = (double)w->fn[i].x, w->fn_d[i][1] = (double)w->fn[i].y, w->fn_d[i][2] = (double)w->fn[i].z;
     w->centroid = place(r, t, p->centroid);
     return 0;
 }
@@ -620,50 +647,82 @@ static pair feature_distance(const view *A, const view *B)
 /* ---- SAT ------------------------------------------------------------------ */
 
 typedef struct axis { mk_lvec3 n; long double s; } axis;
-typedef struct axes { axis *a; int n, cap; } axes;
+typedef struct axes {
+    axis *a;
+    int n, cap;
+    long double best; /* largest separation evaluated so far */
+    long double skip; /* an axis whose separation is certainly below best - skip is not evaluated */
+    int exhaustive;
+} axes;
 
-/* Separation of B from A along n and along -n: min_b n.b - max_a n.a. */
+static void extent(const view *w, const int *idx, int n, mk_lvec3 d, long double *lo, long double *hi)
+{
+    int i;
+    *lo = HUGE_VALL, *hi = -HUGE_VALL;
+    for (i = 0; i < n; ++i) {
+        long double t = ldot(d, w->v[idx ? idx[i] : i]);
+        if (t < *lo) *lo = t;
+        if (t > *hi) *hi = t;
+    }
+}
+
+/* Separation of B from A along n and along -n: min_b n.b - max_a n.a. The
+ * probe vertices are a subset, so their extents give upper bounds of both
+ * separations; if neither bound reaches best - skip, the axis can neither be
+ * the answer nor tie with it, and the full scans are spared. */
 static int push_axis(axes *L, const view *A, const view *B, mk_lvec3 n)
 {
-    long double amin = HUGE_VALL, amax = -HUGE_VALL, bmin = HUGE_VALL, bmax = -HUGE_VALL, t;
-    int i;
+    long double amin, amax, bmin, bmax;
+    if (!L->exhaustive && L->n > 0) {
+        extent(A, A->p->probe, A->p->nprobe, n, &amin, &amax);
+        extent(B, B->p->probe, B->p->nprobe, n, &bmin, &bmax);
+        if (bmin - amax < L->best - L->skip && amin - bmax < L->best - L->skip) return 0;
+    }
     if (grow((void **)&L->a, &L->cap, L->n + 2, sizeof *L->a)) return -1;
-    for (i = 0; i < A->p->nv; ++i) {
-        t = ldot(n, A->v[i]);
-        if (t < amin) amin = t;
-        if (t > amax) amax = t;
-    }
-    for (i = 0; i < B->p->nv; ++i) {
-        t = ldot(n, B->v[i]);
-        if (t < bmin) bmin = t;
-        if (t > bmax) bmax = t;
-    }
+    extent(A, NULL, A->p->nv, n, &amin, &amax);
+    extent(B, NULL, B->p->nv, n, &bmin, &bmax);
     L->a[L->n].n = n;
     L->a[L->n++].s = bmin - amax;
     L->a[L->n].n = lscale(n, -1);
     L->a[L->n++].s = amin - bmax;
+    if (bmin - amax > L->best) L->best = bmin - amax;
+    if (amin - bmax > L->best) L->best = amin - bmax;
     return 0;
 }
 
 /* Can edge i of A and edge j of B span a face of the Minkowski difference
  * A - B? Their Gauss-map arcs (between the normals of each edge's two faces;
  * B's arc negated) must cross. Comparisons are non-strict: keeping a pair that
- * is not a face only adds a valid upper bound. Bare segments have no arc. */
+ * is not a face only adds a valid upper bound. Bare segments have no arc.
+ * This runs for every edge pair, so a double-precision pass rejects the
+ * clear cases first: unit vectors give dot products within ~1e-15 of the long
+ * double ones, and only a product of two dots both clearly of one sign is
+ * trusted to reject. */
+static int same_sign(double a, double b) { return (a > 1e-14 && b > 1e-14) || (a < -1e-14 && b < -1e-14); }
+static double ddot(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
 static int minkowski_face(const view *A, int i, const view *B, int j)
 {
     const int *fa = A->p->ef[i], *fb = B->p->ef[j];
     long double c1, c2, c3, c4;
     if (fa[0] < 0 || fb[0] < 0) return 1;
+    if (same_sign(ddot(B->fn_d[fb[0]], A->ek_d[i]), ddot(B->fn_d[fb[1]], A->ek_d[i])) ||
+        same_sign(ddot(A->fn_d[fa[0]], B->ek_d[j]), ddot(A->fn_d[fa[1]], B->ek_d[j])))
+        return 0;
     c1 = ldot(B->fn[fb[0]], A->ek[i]);
     c2 = ldot(B->fn[fb[1]], A->ek[i]);
+    if (c1 * c2 > 0) return 0;
     c3 = ldot(A->fn[fa[0]], B->ek[j]);
     c4 = ldot(A->fn[fa[1]], B->ek[j]);
-    return c1 * c2 <= 0 && c3 * c4 <= 0 && c1 * c4 <= 0;
+    return c3 * c4 <= 0 && c1 * c4 <= 0;
 }
 
-static int sat_axes(axes *L, const view *A, const view *B, unsigned flags)
+static int sat_axes(axes *L, const view *A, const view *B, unsigned flags, long double gap)
 {
     int i, j;
+    L->best = -HUGE_VALL;
+    L->skip = gap;
+    L->exhaustive = (flags & MK_ORACLE_EXHAUSTIVE) != 0;
     for (i = 0; i < A->p->nf; ++i)
         if (push_axis(L, A, B, A->fn[i])) return -1;
     for (j = 0; j < B->p->nf; ++j)
@@ -736,6 +795,7 @@ static int poly_query(const mk_oracle_shape *a, const mk_oracle_pose *xa, const 
                       const mk_oracle_pose *xb, unsigned flags, mk_oracle_result *out)
 {
     long double r[3][3], scale = a->size > b->size ? a->size : b->size;
+    long double tie = 1e-9L * scale; /* axes closer than this in separation make the normal ambiguous */
     mk_lvec3 t = lrot_t(xa->r, lsub(xb->p, xa->p)), n;
     view A, B;
     axes L;
@@ -761,10 +821,10 @@ static int poly_query(const mk_oracle_shape *a, const mk_oracle_pose *xa, const 
         unique = closest.d2 > 0;
         out->distance = sqrtl(closest.d2);
         out->normal = unique ? lnormalize(n) : lv(0, 0, 1);
-    } else if (sat_axes(&L, &A, &B, flags)) {
+    } else if (sat_axes(&L, &A, &B, flags, tie)) {
         rc = -1;
     } else {
-        int bi = best_axis(&L, 1e-9L * scale, &unique);
+        int bi = best_axis(&L, tie, &unique);
         if (L.a[bi].s > 0) {
             closest = feature_distance(&A, &B);
             out->distance = sqrtl(closest.d2);

@@ -13,8 +13,10 @@
  *  - penetrating: SAT over all face normals of both shapes and all edge-pair
  *    cross products, both orientations; the default run skips edge pairs whose
  *    Gauss-map arcs cannot cross (they are never faces of the Minkowski
- *    difference), MK_ORACLE_EXHAUSTIVE keeps every pair and
- *    tests/test_oracle.c checks that both agree;
+ *    difference) and axes whose separation, bounded from above by the
+ *    extents of an inner polytope (the vertices extreme along 26 fixed
+ *    directions), cannot reach the best one; MK_ORACLE_EXHAUSTIVE evaluates
+ *    every axis in full and tests/test_oracle.c checks that both agree;
  *  - sphere and capsule cores are a point and a segment and go through the
  *    same feature distances; anything against a plane uses the support
  *    function (cylinders and cones are supported against planes only).
@@ -55,6 +57,8 @@ typedef struct mk_oracle_poly {
     int (*ef)[2];         /* the two faces of each edge (-1 for a bare segment) */
     mk_lvec3 centroid;    /* mean of the vertices */
     long double radius;   /* max distance of a vertex from the local origin */
+    int nprobe;           /* vertices extreme along 26 directions: their extents */
+    int *probe;           /*   bound the full ones cheaply in SAT (an inner polytope) */
 } mk_oracle_poly;
 
 typedef struct mk_oracle_shape {
