@@ -17,7 +17,8 @@
 #include <btBulletCollisionCommon.h>
 
 #include <atomic>
-#include <map>
+#include <mutex>
+#include <unordered_map>
 #include <vector>
 
 #include "minko/broadphase.h"
@@ -47,10 +48,15 @@ inline btVector3 to_bt(mk_vec3 v) { return btVector3(v.x, v.y, v.z); }
 inline mk_quat to_mk(const btQuaternion &q) { return mk_quat_make(q.x(), q.y(), q.z(), q.w()); }
 
 // Maps every supported shape but btConvexHullShape, which needs a Minko hull
-// built once per shape (see the collision configuration's hull cache).
+// built once per shape (see the collision configuration's hull cache); a hull
+// shape's margin is read by refresh_map().
 // MK_ERR_UNSUPPORTED for other types; Minko's own status for sizes Minko
 // refuses (e.g. a box with a zero extent).
 mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out);
+
+// Brings a mapping made earlier up to date with its shape (a primitive is
+// mapped again, a hull keeps its Minko hull and takes the current margin).
+mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map);
 
 // World pose of the mapped shape for a Bullet world transform.
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map);
@@ -161,8 +167,12 @@ public:
     Backend narrowphase() const { return m_backend; }
     // Takes effect for dispatchers built afterwards; see set_narrowphase() for a running world.
     void set_backend(Backend b) { m_backend = b; }
-    // Shapes of the types above, hulls through the cache. MK_ERR_UNSUPPORTED otherwise.
+    // Shapes of the types above, hulls through the cache (built on first use,
+    // checked against the shape's points, scaling and count). MK_ERR_UNSUPPORTED
+    // otherwise. Thread-safe.
     mk_status map_shape(const btCollisionShape *shape, ShapeMap *out);
+    // Minko hulls built so far (cache size).
+    int hull_count() const;
     // Bullet's own create function for a pair of shape types.
     btCollisionAlgorithmCreateFunc *native_create_func(int proxyType0, int proxyType1)
     {
@@ -180,8 +190,17 @@ public:
 
 private:
     struct CreateFunc;
+    struct HullEntry {
+        mk_hull *hull;
+        unsigned long long fingerprint;
+    };
     Backend m_backend;
     CreateFunc *m_create;
+    mutable std::mutex m_hull_lock;
+    std::unordered_map<const btCollisionShape *, HullEntry> m_hulls;
+    // Hulls replaced because their shape changed (or its address was reused):
+    // algorithms created before may still point at them, so they live on.
+    std::vector<mk_hull *> m_retired;
 };
 
 // True for the shape types the Minko narrowphase is registered for.

@@ -71,6 +71,15 @@ mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out)
     return st;
 }
 
+mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map)
+{
+    if (shape->getShapeType() != CONVEX_HULL_SHAPE_PROXYTYPE) return map_primitive(shape, map);
+    const btScalar margin = shape->getMargin();
+    if (!(margin >= 0)) return MK_ERR_BAD_SIZE;
+    map->shape.radius = margin;
+    return MK_OK;
+}
+
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map)
 {
     mk_transform t = mk_transform_make(to_mk(world.getOrigin()), to_mk(world.getRotation()));

@@ -28,10 +28,10 @@ const double kRel = 2e-6;
 // Two convex solids are equal iff their support functions are: compare
 // h(d) = max over the solid of d.x for Bullet's shape (its own
 // localGetSupportingVertex, margins included) and for the mapped Minko shape.
-void check_same_solid(const btConvexShape *bt, const char *what)
+void check_same_solid(const btConvexShape *bt, const char *what, mkb::CollisionConfiguration *config = nullptr)
 {
     mkb::ShapeMap m;
-    MK_ASSERT_STATUS(mkb::map_primitive(bt, &m), MK_OK);
+    MK_ASSERT_STATUS(config ? config->map_shape(bt, &m) : mkb::map_primitive(bt, &m), MK_OK);
     btVector3 lo, hi;
     btTransform id;
     id.setIdentity();
@@ -819,18 +819,86 @@ const double kContactTol = 1e-9, kNormalTol = 1e-9;
 const double kContactTol = 2e-4, kNormalTol = 1e-5;
 #endif
 
+// Hulls: the cached Minko hull grown by the margin is Bullet's hull shape
+// (points scaled, margin outside); the cache builds one hull per shape, sees
+// changed points, and refuses degenerate clouds (left to Bullet).
+START_TEST(shape_hull_cache)
+{
+    mkb::CollisionConfiguration config;
+    btConvexHullShape h;
+    mk_rng rng = {31};
+    for (int i = 0; i < 40; i++) {
+        mk_vec3 p = mk_rng_dir(&rng);
+        h.addPoint(btVector3((btScalar)p.x * 2, (btScalar)p.y, (btScalar)p.z * btScalar(0.5)), false);
+    }
+    h.recalcLocalAabb();
+    check_same_solid(&h, "hull", &config);
+    check_same_solid(&h, "hull again", &config);
+    ck_assert_int_eq(config.hull_count(), 1);
+    h.setLocalScaling(btVector3(1, 3, 1));
+    h.setMargin(btScalar(0.1));
+    check_same_solid(&h, "scaled hull, margin 0.1", &config);
+    ck_assert_int_eq(config.hull_count(), 1);
+    mkb::ShapeMap before, after;
+    MK_ASSERT_STATUS(config.map_shape(&h, &before), MK_OK);
+    h.addPoint(btVector3(5, 0, 0));
+    MK_ASSERT_STATUS(config.map_shape(&h, &after), MK_OK);
+    ck_assert(before.shape.u.hull != after.shape.u.hull);  // rebuilt, the old one kept alive
+    check_same_solid(&h, "hull with a new point", &config);
+    btConvexHullShape flat;
+    flat.addPoint(btVector3(0, 0, 0));
+    flat.addPoint(btVector3(1, 0, 0));
+    flat.addPoint(btVector3(0, 1, 0));
+    MK_ASSERT_STATUS(config.map_shape(&flat, &after), MK_ERR_DEGENERATE);
+    btDefaultCollisionConfiguration native;
+    btSphereShape ball(btScalar(0.5));
+    bool used_minko = true;
+    btTransform xa(btQuaternion::getIdentity(), btVector3(0, 0, 0)), xb(btQuaternion::getIdentity(), btVector3(0, btScalar(0.4), 0));
+    collide_once(&config, &flat, xa, &ball, xb, &used_minko);
+    ck_assert(!used_minko);  // the degenerate hull's pairs run on Bullet
+}
+END_TEST
+
 // The exact signed distance and normal of two Bullet convex shapes, by the
 // long double brute-force oracle on the mapped shapes (the mapping itself is
 // checked against Bullet's support functions by the shape tests).
+// An oracle shape and pose for a Bullet shape: hulls straight from Bullet's
+// scaled points and margin (not through Minko's quickhull), the others from
+// the checked mapping.
+bool oracle_of(const btCollisionShape *s, const btTransform &x, mk_oracle_shape *o, mk_oracle_pose *pose)
+{
+    mkb::ShapeMap m;
+    m.axis = mk_quat_identity();
+    if (s->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE) {
+        const btConvexHullShape *h = static_cast<const btConvexHullShape *>(s);
+        std::vector<mk_lvec3> pts;
+        for (int i = 0; i < h->getNumPoints(); i++) {
+            btVector3 p = h->getScaledPoint(i);
+            pts.push_back(mk_lvec3{(long double)p.x(), (long double)p.y(), (long double)p.z()});
+        }
+        if (mk_oracle_shape_points(o, pts.data(), (int)pts.size(), (long double)h->getMargin()) != 0) return false;
+    } else if (mkb::map_primitive(s, &m) != MK_OK || mk_oracle_shape_init(o, &m.shape) != 0) {
+        return false;
+    }
+    *pose = mk_oracle_pose_of(mkb::minko_pose(x, m));
+    return true;
+}
+
 bool oracle_reference(const btCollisionShape *a, const btTransform &xa, const btCollisionShape *b, const btTransform &xb,
                       PointOut *out)
 {
-    mkb::ShapeMap ma, mb;
-    if (mkb::map_primitive(a, &ma) != MK_OK || mkb::map_primitive(b, &mb) != MK_OK) return false;
-    mk_oracle_result r;
-    if (mk_oracle_distance(&ma.shape, mkb::minko_pose(xa, ma), &mb.shape, mkb::minko_pose(xb, mb), &r) != 0 ||
-        !r.normal_defined)
+    mk_oracle_shape oa, ob;
+    mk_oracle_pose pa, pb;
+    if (!oracle_of(a, xa, &oa, &pa)) return false;
+    if (!oracle_of(b, xb, &ob, &pb)) {
+        mk_oracle_shape_free(&oa);
         return false;
+    }
+    mk_oracle_result r;
+    const bool ok = mk_oracle_query(&oa, &pa, &ob, &pb, 0, &r) == 0 && r.normal_defined;
+    mk_oracle_shape_free(&oa);
+    mk_oracle_shape_free(&ob);
+    if (!ok) return false;
     out->normal_on_b = -btVector3((btScalar)r.normal.x, (btScalar)r.normal.y, (btScalar)r.normal.z);
     out->distance = (double)r.distance;
     return true;
@@ -855,6 +923,13 @@ START_TEST(np_conventions_match_bullet)
     btCapsuleShape capsule(btScalar(0.3), btScalar(0.8));
     btCapsuleShapeZ capsule_z(btScalar(0.25), btScalar(0.5));
     btStaticPlaneShape plane(btVector3(0, 1, 0), btScalar(0.2));
+    btConvexHullShape hull;
+    mk_rng cloud = {4242};
+    for (int i = 0; i < 24; i++) {
+        mk_vec3 p = mk_rng_dir(&cloud);
+        hull.addPoint(btVector3((btScalar)(0.7 * p.x), (btScalar)(0.4 * p.y), (btScalar)(0.5 * p.z)), false);
+    }
+    hull.recalcLocalAabb();
     struct Case {
         const char *name;
         btCollisionShape *a, *b;
@@ -866,7 +941,9 @@ START_TEST(np_conventions_match_bullet)
         {"capsule-capsule", &capsule, &capsule_z, true, true}, {"box-capsule", &box, &capsule, false, true},
         {"capsule-box", &capsule_z, &box, false, true},        {"sphere-plane", &sphere, &plane, true, true},
         {"plane-box", &plane, &box, true, true},               {"capsule-plane", &capsule, &plane, true, true},
-        {"box-box", &box, &box, true, false},
+        {"box-box", &box, &box, true, false},             {"hull-plane", &hull, &plane, false, false},
+        {"sphere-hull", &sphere, &hull, false, false},     {"hull-box", &hull, &box, false, false},
+        {"hull-hull", &hull, &hull, false, false},
     };
     mk_rng rng = {777};
     int compared = 0;
@@ -1053,6 +1130,7 @@ Suite *suite()
     suite_add_tcase(s, b);
     TCase *n = tcase_create("narrowphase");
     tcase_set_timeout(n, 60);
+    tcase_add_test(n, shape_hull_cache);
     tcase_add_test(n, np_conventions_match_bullet);
     tcase_add_test(n, np_world_rests_on_minko_contacts);
     tcase_add_test(n, np_switch_at_run_time);
