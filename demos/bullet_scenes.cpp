@@ -396,6 +396,28 @@ void scene_convex_stack(SceneSpec &s)
     }
 }
 
+// A pile of 1000 spheres and capsules (radius 0.5; capsules 0.3 x 1.2 along Y)
+// dropped from a 10 x 10 x 10 grid onto the ground: the closed-form pairs.
+void scene_prim_pile(SceneSpec &s)
+{
+    s.name = "prim_pile";
+    s.variant = "1000_spheres_capsules";
+    s.steps = 600;
+    s.quick_steps = 30;
+    s.drift_from = 2.0 / 3.0;
+    s.judge_every = 10;
+    benchmark_setup(s);
+    int ball = s.add_shape(new btSphereShape(btScalar(0.5)));
+    int cap = s.add_shape(new btCapsuleShape(btScalar(0.3), btScalar(0.6)));
+    for (int k = 0; k < 10; k++)
+        for (int j = 0; j < 10; j++)
+            for (int i = 0; i < 10; i++) {
+                const bool sphere = (i + j + k) % 2 == 0;
+                btVector3 at(btScalar(-9 + 2 * i + 0.1 * k), btScalar(1 + 2.2 * k), btScalar(-9 + 2 * j - 0.1 * k));
+                s.keep_above_ground(s.add_body(sphere ? ball : cap, 1, at), sphere ? btScalar(0.5) : btScalar(0.3));
+            }
+}
+
 // Stability scenes: Bullet's default solver (10 iterations), no sleeping so
 // jitter shows in drift and kinetic energy instead of being frozen away.
 void stability_setup(SceneSpec &s, btScalar ground_half)
@@ -523,9 +545,11 @@ void mk_tiny(SceneSpec &s, int) { scene_tiny_boxes(s); }
 void mk_huge(SceneSpec &s, int) { scene_huge_boxes(s); }
 void mk_wall(SceneSpec &s, int ccd) { scene_sphere_wall(s, ccd != 0); }
 void mk_hulls(SceneSpec &s, int) { scene_random_hulls(s); }
+void mk_prims(SceneSpec &s, int) { scene_prim_pile(s); }
 
 const SceneEntry kScenes[] = {
     {"3000_boxes", mk_3000, 0},     {"1000_stack", mk_1000, 0},   {"convex_stack", mk_convex, 0},
+    {"prim_pile", mk_prims, 0},
     {"tower", mk_tower, 0},         {"mass_ratio_100", mk_ratio, 100}, {"mass_ratio_1000", mk_ratio, 1000},
     {"tiny_boxes", mk_tiny, 0},     {"huge_boxes", mk_huge, 0},   {"sphere_wall", mk_wall, 0},
     {"sphere_wall_ccd", mk_wall, 1}, {"random_hulls", mk_hulls, 0},

@@ -51,12 +51,16 @@ public:
         // rescaled primitive or a new margin is seen at once, as by Bullet.
         mk_manifold mf;
         mf.count = 0;
+        // The query runs in A's Bullet frame: B's pose relative to A costs one
+        // matrix-to-quaternion conversion instead of two, and large world
+        // coordinates cancel before they reach Minko.
+        const btTransform &ta = wa->getWorldTransform();
         mk_status st = refresh_map(wa->getCollisionShape(), &m_a);
         if (st == MK_OK) st = refresh_map(wb->getCollisionShape(), &m_b);
         if (st == MK_OK)
-            st = mk_collide(&m_a.shape, minko_pose(wa->getWorldTransform(), m_a), &m_b.shape,
-                            minko_pose(wb->getWorldTransform(), m_b), m_manifold->getContactBreakingThreshold(), &m_cache,
-                            &mf);
+            st = mk_collide(&m_a.shape, mk_transform_make(mk_v3_zero(), m_a.axis), &m_b.shape,
+                            minko_pose(ta.inverseTimes(wb->getWorldTransform()), m_b),
+                            m_manifold->getContactBreakingThreshold(), &m_cache, &mf);
         if (st != MK_OK) {
             m_config->stats.collide_errors++;
             mf.count = 0;
@@ -64,12 +68,12 @@ public:
         // Minko: normal from A to B, depth > 0 penetrating, point_b on B.
         // Bullet: normal on B pointing from B to A, signed distance < 0 penetrating.
         PairContact pts[MK_MANIFOLD_MAX_POINTS];
-        const btVector3 n = to_bt(mf.normal);
+        const btVector3 n = ta.getBasis() * to_bt(mf.normal);
         for (int i = 0; i < mf.count; i++) {
             const mk_contact_point &c = mf.points[i];
             const bool ab = !flip;
             pts[i].normal_on_b = ab ? -n : n;
-            pts[i].point_on_b = to_bt(ab ? c.point_b : c.point_a);
+            pts[i].point_on_b = ta * to_bt(ab ? c.point_b : c.point_a);
             pts[i].distance = -c.depth;
             pts[i].feature_a = ab ? MK_FEATURE_PAIR_A(c.features) : MK_FEATURE_PAIR_B(c.features);
             pts[i].feature_b = ab ? MK_FEATURE_PAIR_B(c.features) : MK_FEATURE_PAIR_A(c.features);

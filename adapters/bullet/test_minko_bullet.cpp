@@ -1062,6 +1062,39 @@ START_TEST(np_world_rests_on_minko_contacts)
 }
 END_TEST
 
+// A shape resized while its pair lives is seen at once, as Bullet's own
+// algorithms read the shape every step: a ball resting on a box ground rides
+// up when the ground box is made twice as tall.
+START_TEST(np_shape_changes_seen)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld world(&dispatcher, &bp, &solver, &config);
+    world.setGravity(btVector3(0, -10, 0));
+    btBoxShape slab(btVector3(5, btScalar(0.5), 5));
+    btSphereShape ball(btScalar(0.25));
+    btRigidBody ground(0, nullptr, &slab);
+    btVector3 inertia;
+    ball.calculateLocalInertia(1, inertia);
+    btRigidBody b(1, nullptr, &ball, inertia);
+    b.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 1, 0)));
+    b.setActivationState(DISABLE_DEACTIVATION);
+    world.addRigidBody(&ground);
+    world.addRigidBody(&b);
+    for (int i = 0; i < 90; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    MK_ASSERT_NEAR(b.getWorldTransform().getOrigin().y(), 0.75, 5e-3);
+    slab.setLocalScaling(btVector3(1, 2, 1));  // top face now at y = 1
+    world.updateSingleAabb(&ground);
+    for (int i = 0; i < 90; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    MK_ASSERT_NEAR(b.getWorldTransform().getOrigin().y(), 1.25, 5e-3);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), 1);  // the same pair algorithm all along
+    world.removeRigidBody(&b);
+    world.removeRigidBody(&ground);
+}
+END_TEST
+
 // A running world switches its narrowphase both ways; pairs get new
 // algorithms and the simulation goes on undisturbed.
 START_TEST(np_switch_at_run_time)
@@ -1133,6 +1166,7 @@ Suite *suite()
     tcase_add_test(n, shape_hull_cache);
     tcase_add_test(n, np_conventions_match_bullet);
     tcase_add_test(n, np_world_rests_on_minko_contacts);
+    tcase_add_test(n, np_shape_changes_seen);
     tcase_add_test(n, np_switch_at_run_time);
     suite_add_tcase(s, n);
     return s;
