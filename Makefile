@@ -34,6 +34,10 @@ ifeq ($(SAN),1)
     B := build/san
   endif
 endif
+# A build that leaves modules out has different objects: its own directory.
+ifneq ($(strip $(MK_WITHOUT)),)
+  B := $(B)/without-$(shell echo $(MK_WITHOUT) | tr ' ' '-')
+endif
 
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 # V=1 shows full command lines.
@@ -170,8 +174,19 @@ check: deps
 	$(MAKE) -j$(JOBS) PRECISION=single SAN=0 test-run
 	$(MAKE) -j$(JOBS) PRECISION=double SAN=1 test-run
 	$(MAKE) -j$(JOBS) PRECISION=single SAN=1 test-run
+	$(MAKE) -j$(JOBS) PRECISION=double SAN=0 MK_WITHOUT="gjk epa sat" without-run
 	scripts/check-abi.sh "$(CC)"
 	@echo "make check: all passed"
+
+# The library without the iterative narrowphase must link, and the closed
+# forms must still answer (run by make check with MK_WITHOUT="gjk epa sat").
+.PHONY: without-run
+without-run: lib $(B)/tests/closed_forms_only
+	$(B)/tests/closed_forms_only
+$(B)/tests/closed_forms_only: tests/without/closed_forms_only.c $(STATIC_LIB)
+	@mkdir -p $(@D)
+	$(say) CCLD $@
+	$(Q)$(CC) -std=c99 -pedantic $(WARN) $(FP) $(INC) $(WITHOUT_DEFS) $(CFLAGS) $< $(STATIC_LIB) -lm -o $@
 
 # ---- demos, benchmarks, adapters: each area brings its own fragment ----------
 # A fragment registers itself by appending, e.g.

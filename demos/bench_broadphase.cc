@@ -8,7 +8,8 @@
 // (missing_pairs / extra_pairs). Also timed: the memory-bound floor, reading
 // every AABB and writing the true pairs once.
 //
-//   bench_broadphase [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME]
+//   bench_broadphase [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME] [--budget MS]
+// (--budget: time per backend and scene over all repetitions, default 12000)
 // (--backend runs one backend, for profiling with callgrind; no ratios then)
 //
 // Output: JSON Lines per ../shared/BENCH_FORMAT.md (suite "broad") and a table.
@@ -527,6 +528,7 @@ int main(int argc, char **argv)
 {
     bool quick = false;
     int reps = 3, only_n = 0;
+    double budget_ms = 12000;
     const char *json = nullptr, *only = nullptr, *only_backend = nullptr;
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--quick")) quick = true;
@@ -535,7 +537,8 @@ int main(int argc, char **argv)
         else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
         else if (!std::strcmp(argv[i], "--backend") && i + 1 < argc) only_backend = argv[++i];
         else if (!std::strcmp(argv[i], "--n") && i + 1 < argc) only_n = std::atoi(argv[++i]);
-        else { std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME]\n", argv[0]); return 2; }
+        else if (!std::strcmp(argv[i], "--budget") && i + 1 < argc) budget_ms = std::atof(argv[++i]);
+        else { std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME] [--budget MS]\n", argv[0]); return 2; }
     }
     std::vector<Plan> plan;
     if (quick) {
@@ -563,7 +566,7 @@ int main(int argc, char **argv)
         std::vector<Result> res(NBACKENDS);
         // Time budget per backend and scene, over all repetitions: the slow
         // structures at n = 100k are measured on fewer frames (n says how many).
-        std::vector<double> left(NBACKENDS, quick ? 3000.0 : 12000.0);
+        std::vector<double> left(NBACKENDS, quick ? 3000.0 : budget_ms);
         for (int rep = 0; rep < reps; ++rep)
             for (int b = 0; b < NBACKENDS; ++b) {
                 Result r;

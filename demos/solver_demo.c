@@ -2,28 +2,34 @@
  * NOT part of the library, that exists to measure what warm starting from
  * the contact cache is worth (issue 4, seed 000 and seed 002).
  *
- * Rigid boxes on a ground plane; contacts from mk_collide(); per contact
- * point a normal row with Baumgarte stabilisation (beta = 0.2 above a 5 mm
- * slop; speculative points may close their gap in one step) and two friction
- * rows clamped to the friction disc (mu 0.5; 0.2 for the sliding box). Each
- * scene runs three ways:
+ * Rigid boxes on a ground plane; contacts from mk_collide() (2 cm
+ * speculative margin); per contact point a normal row and two friction rows
+ * clamped to the friction disc. Penetration beyond a 5 mm slop is removed at
+ * beta = 0.2 per step by split impulse (pseudo velocities that move the
+ * bodies but never enter the dynamics), or with --baumgarte through the
+ * velocity rows. Each scene runs three ways:
  *   cold     every step starts from lambda = 0;
  *   feature  lambda^0 from mk_contact_cache, keyed by (body, body, feature pair);
  *   nearest  Bullet's policy: the previous frame's point of the same pair
  *            nearest in body A's local frame, if within 0.02 (greedy, each
  *            old point used once, as btPersistentManifold's replacement does).
- * and in two solver modes:
+ * and with two solver budgets:
  *   pgs10    exactly 10 iterations per step: does the scene stand and settle?
  *   converge iterate until no row changes any velocity by more than
  *            1e-5 m/s (cap 500): how many iterations does each step need?
- * Per scene, mode and warm start: mean / p95 / max iterations per step,
- * the velocity residual left after the last iteration, the largest
- * penetration over the last second, drift (largest horizontal displacement
- * of a box from where it started), kinetic energy per box at the end, and
- * the fraction of contact points that found a lambda^0. Output: a table on
- * stdout and JSON Lines (suite "contacts", ../shared/BENCH_FORMAT.md).
+ * Scenes marked "at rest" first run one second with the converged solver so
+ * that every mode starts from the same standing stack (the warm-start modes
+ * with their caches filled, as in a running game); tower_drop is the same
+ * tower released from exact contact, whose landing sets it rocking.
+ * Per scene, budget and warm start: mean / p95 / max iterations per step,
+ * the velocity residual left after the last iteration, the fraction of
+ * contact points that found a lambda^0, the largest penetration over the
+ * last second, drift (largest horizontal displacement of a box from where it
+ * started), kinetic energy per box at the end, and how far the top box came
+ * down. Output: a table on stdout and JSON Lines (suite "contacts",
+ * ../shared/BENCH_FORMAT.md).
  *
- *   solver_demo [--quick] [--json FILE] [--scene NAME]
+ *   solver_demo [--quick] [--json FILE] [--scene NAME] [--baumgarte]
  */
 #include <math.h>
 #include <stdio.h>
@@ -39,7 +45,7 @@
 #define GRAVITY MK_REAL(-9.81)
 #define BETA MK_REAL(0.2)
 #define SLOP MK_REAL(0.005)
-#define MARGIN MK_REAL(0.02)        /* speculative distance, Bullet's breaking threshold */
+#define MARGIN MK_REAL(0.02)        /* speculative distance: Bullet's contact breaking threshold */
 #define NEAREST_THRESHOLD MK_REAL(0.02)
 #define RESIDUAL_TOL MK_REAL(1e-5)  /* m/s */
 #define MAX_CONVERGE_ITERS 500
@@ -51,6 +57,7 @@ typedef struct body {
     mk_shape shape;
     mk_transform x;
     mk_vec3 v, w;
+    mk_vec3 pv, pw;               /* split impulse: pseudo velocities, position correction only */
     mk_real mass, inv_mass;
     mk_vec3 inertia, inv_inertia; /* principal, local */
     mk_vec3 start;
@@ -64,7 +71,8 @@ typedef struct row {
     mk_real mn, mt1, mt2;  /* effective masses 1 / (J M^-1 J^T) */
     mk_real kn;            /* J M^-1 J^T of the normal row: turns an impulse into a velocity change */
     mk_real bias;          /* target normal velocity */
-    mk_real ln, lt1, lt2;
+    mk_real push;          /* split impulse: target pseudo velocity that removes penetration */
+    mk_real ln, lt1, lt2, lp;
     mk_real depth;
     int matched;
 } row;
@@ -87,6 +95,7 @@ typedef struct world {
     mk_real mu;
     warm_mode warm;
     mk_contact_cache *cache;
+    int split;   /* 1: split impulse, 0: Baumgarte */
     int step;
 } world;
 
@@ -127,6 +136,15 @@ static mk_real row_k(const body *a, const body *b, mk_vec3 ra, mk_vec3 rb, mk_ve
 {
     mk_vec3 ca = mk_v3_cross(ra, d), cb = mk_v3_cross(rb, d);
     return a->inv_mass + b->inv_mass + mk_v3_dot(ca, inv_inertia_mul(a, ca)) + mk_v3_dot(cb, inv_inertia_mul(b, cb));
+}
+
+static void apply_pseudo(world *w, const row *r, mk_vec3 p)
+{
+    body *a = &w->b[r->a], *b = &w->b[r->b];
+    a->pv = mk_v3_mad(a->pv, -a->inv_mass, p);
+    a->pw = mk_v3_sub(a->pw, inv_inertia_mul(a, mk_v3_cross(r->ra, p)));
+    b->pv = mk_v3_mad(b->pv, b->inv_mass, p);
+    b->pw = mk_v3_add(b->pw, inv_inertia_mul(b, mk_v3_cross(r->rb, p)));
 }
 
 static void apply(world *w, const row *r, mk_vec3 p)
@@ -173,7 +191,12 @@ static void add_row(world *w, int ia, int ib, const mk_manifold *m, const mk_con
     r->mt1 = 1 / row_k(a, b, r->ra, r->rb, r->t1);
     r->mt2 = 1 / row_k(a, b, r->ra, r->rb, r->t2);
     r->depth = c->depth;
-    r->bias = c->depth > SLOP ? BETA * (c->depth - SLOP) / DT : c->depth < 0 ? c->depth / DT : 0;
+    /* Speculative points may close their gap in one step; penetration beyond
+     * the slop is pushed out at BETA per step, through the velocities
+     * (Baumgarte) or through pseudo velocities that never feed back into the
+     * dynamics (split impulse). */
+    r->push = c->depth > SLOP ? BETA * (c->depth - SLOP) / DT : 0;
+    r->bias = c->depth < 0 ? c->depth / DT : w->split ? 0 : r->push;
 }
 
 /* MK_OK, or the status of the first pair mk_collide refused (a pair left out
@@ -203,6 +226,8 @@ static mk_status collide_all(world *w)
 static void warm_start(world *w)
 {
     int i, k;
+    /* A new frame: lookups now see what the last step stored. */
+    if (w->warm == WARM_FEATURE) mk_contact_cache_begin_frame(w->cache);
     for (i = 0; i < w->nr; ++i) {
         row *r = &w->rows[i];
         if (w->warm == WARM_FEATURE) {
@@ -235,7 +260,6 @@ static void warm_start(world *w)
 static void remember(world *w)
 {
     int i;
-    if (w->warm == WARM_FEATURE) mk_contact_cache_begin_frame(w->cache);
     for (i = 0; i < w->nr; ++i) {
         const row *r = &w->rows[i];
         if (w->warm == WARM_FEATURE) {
@@ -292,15 +316,31 @@ static mk_real sweep(world *w)
     return residual;
 }
 
+/* Split impulse: the position pass, on pseudo velocities (normal rows only). */
+static void push_sweep(world *w)
+{
+    int i;
+    for (i = 0; i < w->nr; ++i) {
+        row *r = &w->rows[i];
+        const body *a = &w->b[r->a], *b = &w->b[r->b];
+        mk_vec3 vr = mk_v3_sub(mk_v3_add(b->pv, mk_v3_cross(b->pw, r->rb)), mk_v3_add(a->pv, mk_v3_cross(a->pw, r->ra)));
+        mk_real lnew = mk_max(r->lp + r->mn * (r->push - mk_v3_dot(vr, r->n)), 0);
+        apply_pseudo(w, r, mk_v3_scale(r->n, lnew - r->lp));
+        r->lp = lnew;
+    }
+}
+
 static void integrate(world *w)
 {
     int i;
     for (i = 0; i < w->nb; ++i) {
         body *bd = &w->b[i];
         mk_quat dq;
+        mk_vec3 v = mk_v3_add(bd->v, bd->pv), om = mk_v3_add(bd->w, bd->pw);
+        bd->pv = bd->pw = mk_v3_zero();
         if (bd->inv_mass == 0) continue;
-        bd->x.p = mk_v3_mad(bd->x.p, DT, bd->v);
-        dq = mk_quat_mul(mk_quat_make(bd->w.x, bd->w.y, bd->w.z, 0), bd->x.q);
+        bd->x.p = mk_v3_mad(bd->x.p, DT, v);
+        dq = mk_quat_mul(mk_quat_make(om.x, om.y, om.z, 0), bd->x.q);
         bd->x.q = mk_quat_normalize(mk_quat_make(bd->x.q.x + MK_REAL(0.5) * DT * dq.x, bd->x.q.y + MK_REAL(0.5) * DT * dq.y,
                                                  bd->x.q.z + MK_REAL(0.5) * DT * dq.z, bd->x.q.w + MK_REAL(0.5) * DT * dq.w));
     }
@@ -332,6 +372,8 @@ static step_stats step(world *w, int fixed_iterations)
             s.iterations++;
         } while (s.residual > RESIDUAL_TOL && s.iterations < MAX_CONVERGE_ITERS);
     }
+    if (w->split)
+        for (i = 0; i < (fixed_iterations > 0 ? fixed_iterations : 10); ++i) push_sweep(w);
     remember(w);
     integrate(w);
     return s;
@@ -344,6 +386,8 @@ typedef struct scene {
     const char *what;
     mk_real seconds;
     mk_real mu;
+    int settled;   /* start from the stack at rest (see run) rather than from exact contact */
+    int quick;     /* part of --quick */
     void (*build)(world *w);
 } scene;
 
@@ -386,10 +430,11 @@ static void build_pyramid(world *w)
 }
 
 static const scene scenes[] = {
-    {"tower", "10 boxes 0.7x0.7x0.3 m, 110 kg, on the ground", 5, MK_REAL(0.5), build_tower},
-    {"heavy_on_light", "1000 kg box on a 10 kg box (1:100)", 5, MK_REAL(0.5), build_heavy_on_light},
-    {"slide_spin", "box sliding at 3 m/s, spinning at 8 rad/s, mu 0.2, until it stops", MK_REAL(1.5), MK_REAL(0.2), build_slide_spin},
-    {"pyramid", "55 unit boxes in 10 rows", 5, MK_REAL(0.5), build_pyramid},
+    {"tower", "10 boxes 0.7x0.7x0.3 m, 110 kg, standing at rest", 5, MK_REAL(0.5), 1, 1, build_tower},
+    {"tower_drop", "the same tower released from exact contact", 5, MK_REAL(0.5), 0, 0, build_tower},
+    {"heavy_on_light", "1000 kg box on a 10 kg box (1:100), at rest", 5, MK_REAL(0.5), 1, 1, build_heavy_on_light},
+    {"slide_spin", "box sliding at 3 m/s, spinning at 8 rad/s, mu 0.2", MK_REAL(1.5), MK_REAL(0.2), 0, 1, build_slide_spin},
+    {"pyramid", "55 unit boxes in 10 rows, at rest", 5, MK_REAL(0.5), 1, 0, build_pyramid},
 };
 
 /* ---- runs and reporting --------------------------------------------------------------- */
@@ -403,7 +448,7 @@ typedef struct run_result {
 
 static int cmp_int(const void *a, const void *b) { return *(const int *)a - *(const int *)b; }
 
-static run_result run(const scene *sc, warm_mode warm, int fixed_iterations)
+static run_result run(const scene *sc, warm_mode warm, int fixed_iterations, int split)
 {
     static world w;
     run_result res;
@@ -415,11 +460,23 @@ static run_result run(const scene *sc, warm_mode warm, int fixed_iterations)
     memset(&w, 0, sizeof w);
     w.mu = sc->mu;
     w.warm = warm;
+    w.split = split;
     if (!iters || mk_contact_cache_create(4 * MAX_ROWS, NULL, &w.cache) != MK_OK) {
         fprintf(stderr, "solver_demo: out of memory\n");
         exit(2);
     }
     sc->build(&w);
+    if (sc->settled) {
+        /* Start from rest: one second with the converged solver (warm-started
+         * as the run will be), so every mode begins from the same standing
+         * stack and the run shows whether 10 iterations can hold it. */
+        int k;
+        for (k = 0; k < (int)(1 / DT + MK_REAL(0.5)); ++k) step(&w, 0);
+        for (k = 0; k < w.nb; ++k) {
+            w.b[k].start = w.b[k].x.p;
+            w.b[k].v = w.b[k].w = mk_v3_zero();
+        }
+    }
     top_z0 = w.b[w.nb - 1].x.p.z;
     for (s = 0; s < steps; ++s) {
         step_stats st = step(&w, fixed_iterations);
@@ -459,28 +516,31 @@ static run_result run(const scene *sc, warm_mode warm, int fixed_iterations)
     return res;
 }
 
-static void json_line(FILE *f, const scene *sc, const char *variant, warm_mode warm, const run_result *r)
+static void json_line(FILE *f, const scene *sc, const char *variant, warm_mode warm, const run_result *r, int split)
 {
     if (!f) return;
     fprintf(f,
             "{\"suite\":\"contacts\",\"case\":\"%s\",\"variant\":\"%s\",\"backend\":\"minko.%s\",\"n\":%d,"
             "\"iters_mean\":%.3f,\"iters_p95\":%.0f,\"iters_max\":%d,\"residual_mean\":%.3g,\"warm_matched\":%.4f,"
-            "\"max_penetration\":%.6g,\"drift\":%.6g,\"ke_end\":%.6g,\"top_drop\":%.6g,\"precision\":\"%s\"}\n",
+            "\"max_penetration\":%.6g,\"drift\":%.6g,\"ke_end\":%.6g,\"top_drop\":%.6g,\"position_correction\":\"%s\","
+            "\"precision\":\"%s\"}\n",
             sc->name, variant, warm_names[warm], r->steps, r->iters_mean, r->iters_p95, r->iters_max, r->residual_mean,
-            r->matched_frac, r->penetration, r->drift, r->ke_per_box, r->top_drop, mk_is_double_precision() ? "double" : "single");
+            r->matched_frac, r->penetration, r->drift, r->ke_per_box, r->top_drop, split ? "split_impulse" : "baumgarte",
+            mk_is_double_precision() ? "double" : "single");
 }
 
 int main(int argc, char **argv)
 {
     const char *json = NULL, *only = NULL;
-    int quick = 0, i, k, mode;
+    int quick = 0, split = 1, i, k, mode;
     FILE *jf = NULL;
     for (i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--quick")) quick = 1;
         else if (!strcmp(argv[i], "--json") && i + 1 < argc) json = argv[++i];
         else if (!strcmp(argv[i], "--scene") && i + 1 < argc) only = argv[++i];
+        else if (!strcmp(argv[i], "--baumgarte")) split = 0;
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--scene NAME]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--scene NAME] [--baumgarte]\n", argv[0]);
             return 2;
         }
     }
@@ -488,18 +548,22 @@ int main(int argc, char **argv)
         perror(json);
         return 2;
     }
-    printf("solver_demo: sequential impulses, %s precision, 60 Hz, Baumgarte %.1f, residual %.0e m/s\n",
-           mk_is_double_precision() ? "double" : "single", (double)BETA, (double)RESIDUAL_TOL);
+    printf("solver_demo: sequential impulses, %s precision, 60 Hz, %s beta %.1f above %.0f mm, speculative %.0f mm, "
+           "converge to %.0e m/s\n", mk_is_double_precision() ? "double" : "single", split ? "split impulse" : "Baumgarte",
+           (double)BETA, 1e3 * (double)SLOP, 1e3 * (double)MARGIN, (double)RESIDUAL_TOL);
+    for (k = 0; k < (int)(sizeof scenes / sizeof scenes[0]); ++k)
+        if ((!only || !strcmp(only, scenes[k].name)) && (!quick || scenes[k].quick))
+            printf("  %-15s %s\n", scenes[k].name, scenes[k].what);
     printf("%-15s %-8s %-8s %9s %5s %5s %9s %7s %10s %9s %10s %9s\n", "scene", "mode", "warm", "iters", "p95", "max",
            "residual", "matched", "max_pen", "drift", "KE/box", "top_drop");
     for (k = 0; k < (int)(sizeof scenes / sizeof scenes[0]); ++k) {
         const scene *sc = &scenes[k];
         if (only && strcmp(only, sc->name)) continue;
-        if (quick && !strcmp(sc->name, "pyramid")) continue;
+        if (quick && !sc->quick) continue;
         for (mode = 0; mode < 2; ++mode) {
             warm_mode wm;
             for (wm = WARM_COLD; wm < WARM_COUNT; wm = (warm_mode)(wm + 1)) {
-                run_result r = run(sc, wm, mode == 0 ? 10 : 0);
+                run_result r = run(sc, wm, mode == 0 ? 10 : 0, split);
                 if (r.status != MK_OK) {
                     printf("%-15s skipped: a pair of this scene is not in this build (%s)\n", sc->name, mk_status_name(r.status));
                     mode = 2;
@@ -508,7 +572,7 @@ int main(int argc, char **argv)
                 printf("%-15s %-8s %-8s %9.2f %5.0f %5d %9.2e %6.1f%% %10.2e %9.2e %10.2e %9.2e\n", sc->name,
                        mode == 0 ? "pgs10" : "converge", warm_names[wm], r.iters_mean, r.iters_p95, r.iters_max,
                        r.residual_mean, 100 * r.matched_frac, r.penetration, r.drift, r.ke_per_box, r.top_drop);
-                json_line(jf, sc, mode == 0 ? "pgs10" : "converge", wm, &r);
+                json_line(jf, sc, mode == 0 ? "pgs10" : "converge", wm, &r, split);
             }
         }
     }

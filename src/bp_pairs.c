@@ -343,20 +343,41 @@ static mk_bp_pair pair_of(const mk_bp *bp, uint64_t key)
 }
 
 static int pair_less(mk_bp_pair x, mk_bp_pair y) { return x.a < y.a || (x.a == y.a && x.b < y.b); }
-static int pair_eq(mk_bp_pair x, mk_bp_pair y) { return x.a == y.a && x.b == y.b; }
 
-/* set_next = (set - removed) + added; all three sorted, removed within set, added disjoint from it. */
+/* First index in set[from, n) not below p, galloping from `from`: events
+ * are sorted, so each search costs the log of the distance to the last. */
+static int lower_bound(const mk_bp_pair *set, int from, int n, mk_bp_pair p)
+{
+    int step = 1, hi = from;
+    while (hi < n && pair_less(set[hi], p)) { from = hi + 1; hi = from + step; step *= 2; }
+    if (hi > n) hi = n;
+    while (from < hi) {
+        int mid = from + (hi - from) / 2;
+        if (pair_less(set[mid], p)) from = mid + 1;
+        else hi = mid;
+    }
+    return from;
+}
+
+/* set_next = (set - removed) + added; all three sorted, removed within set,
+ * added disjoint from it. Runs between events are block copies: a frame
+ * with few changes costs a memcpy of the set, not a comparison per pair. */
 static void merge_set(mk_pair_table *t)
 {
-    int i = 0, r = 0, a = 0, o = 0;
+    int i = 0, r = 0, a = 0, o = 0, j;
     mk_bp_pair *sw;
-    while (i < t->set_count || a < t->added_count) {
-        if (i < t->set_count && r < t->removed_count && pair_eq(t->set[i], t->removed[r])) { ++i; ++r; continue; }
-        if (a >= t->added_count || (i < t->set_count && pair_less(t->set[i], t->added[a])))
-            t->set_next[o++] = t->set[i++];
-        else
-            t->set_next[o++] = t->added[a++];
+    while (r < t->removed_count || a < t->added_count) {
+        int take_removed = a >= t->added_count || (r < t->removed_count && pair_less(t->removed[r], t->added[a]));
+        mk_bp_pair next = take_removed ? t->removed[r] : t->added[a];
+        j = lower_bound(t->set, i, t->set_count, next);
+        memcpy(t->set_next + o, t->set + i, (size_t)(j - i) * sizeof *t->set);
+        o += j - i;
+        i = j;
+        if (take_removed) { ++i; ++r; }  /* set[i] is the removed pair */
+        else t->set_next[o++] = t->added[a++];
     }
+    memcpy(t->set_next + o, t->set + i, (size_t)(t->set_count - i) * sizeof *t->set);
+    o += t->set_count - i;
     sw = t->set; t->set = t->set_next; t->set_next = sw;
     t->set_count = o;
 }

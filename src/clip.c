@@ -163,11 +163,11 @@ void mk_support_feature(const mk_shape *s, mk_vec3 d, mk_feat *f)
     }
 }
 
-void mk_feat_transform(mk_feat *f, const mk_rel *r)
+void mk_feat_transform(mk_feat *f, const mk_pair *p)
 {
     int i;
-    for (i = 0; i < f->count; ++i) f->v[i] = mk_v3_add(mk_mat3_mul_v3(r->R, f->v[i]), r->t);
-    f->normal = mk_mat3_mul_v3(r->R, f->normal);
+    for (i = 0; i < f->count; ++i) f->v[i] = mk_v3_add(mk_mat3_mul_v3(p->r, f->v[i]), p->t);
+    f->normal = mk_mat3_mul_v3(p->r, f->normal);
 }
 
 /* ---- feature at a point --------------------------------------------------- */
@@ -223,50 +223,34 @@ mk_feature mk_feature_at(const mk_shape *s, mk_vec3 p, mk_vec3 n)
     }
 }
 
-/* ---- closest points of segments ------------------------------------------- */
-
-/* Ericson, Real-Time Collision Detection 5.1.9, with the degenerate cases
- * (zero-length segments, parallel segments) resolved to a fixed choice. */
-void mk_segment_closest(mk_vec3 p0, mk_vec3 p1, mk_vec3 q0, mk_vec3 q1, mk_real *s_out, mk_real *t_out)
-{
-    mk_vec3 d1 = mk_v3_sub(p1, p0), d2 = mk_v3_sub(q1, q0), r = mk_v3_sub(p0, q0);
-    mk_real a = mk_v3_dot(d1, d1), e = mk_v3_dot(d2, d2), f = mk_v3_dot(d2, r), s, t;
-    if (a <= 0 && e <= 0) {
-        s = t = 0;
-    } else if (a <= 0) {
-        s = 0;
-        t = mk_clamp(f / e, 0, 1);
-    } else {
-        mk_real c = mk_v3_dot(d1, r);
-        if (e <= 0) {
-            t = 0;
-            s = mk_clamp(-c / a, 0, 1);
-        } else {
-            mk_real b = mk_v3_dot(d1, d2), denom = a * e - b * b;
-            /* Parallel: denom is 0 up to round-off; any s works, take the one for t's end nearest p0. */
-            s = denom > a * e * MK_REAL_EPSILON ? mk_clamp((b * f - c * e) / denom, 0, 1) : 0;
-            t = (b * s + f) / e;
-            if (t < 0) {
-                t = 0;
-                s = mk_clamp(-c / a, 0, 1);
-            } else if (t > 1) {
-                t = 1;
-                s = mk_clamp((b - c) / a, 0, 1);
-            }
-        }
-    }
-    *s_out = s;
-    *t_out = t;
-}
-
 /* ---- clipping --------------------------------------------------------------- */
 
 /* A side plane of the reference feature: x . n <= d keeps x. */
-typedef struct side_plane { mk_vec3 n; mk_real d; mk_feature id; } side_plane;
+typedef struct side_plane { mk_vec3 n; mk_real d, slop; mk_feature id; } side_plane;
+
+/* An incident vertex up to this fraction of the reference feature's size
+ * outside a side plane is kept as it is instead of being replaced by the
+ * crossings of its two edges with the plane. Equal boxes stacked square have
+ * incident corners exactly on the side planes; without the slop round-off
+ * decides, frame by frame, whether a corner is kept (vertex against face) or
+ * clipped into two crossing points (edge against edge), and the feature IDs
+ * flicker. With it they change only when the misalignment really crosses
+ * 0.5 % of the size. Crossings are always computed on the exact planes, so
+ * clipped regions stay exact; only a vertex in the slop strip may lie that
+ * little outside the reference face, which no solver notices. Only when the
+ * clip direction is the face's own normal, though: along an axis tilted
+ * against the face, a point outside it would be measured deeper than any
+ * real point, and the deepest depth must stay exact. */
+#define MK_MF_CLIP_SLOP MK_REAL(0.005)
 
 static int side_planes(const mk_feat *ref, mk_vec3 n, side_plane *sp)
 {
-    int i;
+    int i, count;
+    mk_vec3 c = mk_v3_zero();
+    mk_real size = 0;
+    for (i = 0; i < ref->count; ++i) c = mk_v3_add(c, ref->v[i]);
+    c = mk_v3_scale(c, 1 / (mk_real)ref->count);
+    for (i = 0; i < ref->count; ++i) size = mk_max(size, mk_v3_dist(c, ref->v[i]));
     if (ref->count == 2) {
         /* The two end planes of a segment, perpendicular to it within the contact plane. */
         mk_vec3 u = mk_v3_sub(ref->v[1], ref->v[0]);
@@ -277,13 +261,9 @@ static int side_planes(const mk_feat *ref, mk_vec3 n, side_plane *sp)
         sp[1].n = u;
         sp[1].d = mk_v3_dot(u, ref->v[1]);
         sp[1].id = ref->vid[1];
-        return 2;
-    }
-    {
+        count = 2;
+    } else {
         /* The prism swept by the polygon along n (not along its own normal: see mk_mf_clip). */
-        mk_vec3 c = mk_v3_zero();
-        for (i = 0; i < ref->count; ++i) c = mk_v3_add(c, ref->v[i]);
-        c = mk_v3_scale(c, 1 / (mk_real)ref->count);
         for (i = 0; i < ref->count; ++i) {
             mk_vec3 a = ref->v[i], b = ref->v[(i + 1) % ref->count];
             mk_vec3 sn = mk_v3_normalize(mk_v3_cross(mk_v3_sub(b, a), n));
@@ -292,8 +272,11 @@ static int side_planes(const mk_feat *ref, mk_vec3 n, side_plane *sp)
             sp[i].d = mk_v3_dot(sn, a);
             sp[i].id = ref->eid[i];
         }
-        return ref->count;
+        count = ref->count;
     }
+    for (i = 0; i < count; ++i)
+        sp[i].slop = count == 2 || mk_fabs_(mk_v3_dot(n, ref->normal)) >= 1 - 64 * MK_REAL_EPSILON ? MK_MF_CLIP_SLOP * size : 0;
+    return count;
 }
 
 /* Appends the candidate for incident core point p with features (fref,
@@ -354,12 +337,23 @@ static int clip_polygon(const mk_feat *ref, const mk_feat *inc, const side_plane
         for (i = 0; i < n; ++i) {
             const clip_vert *a = &src[i], *b = &src[(i + 1) % n];
             mk_real da = mk_v3_dot(sp[q].n, a->p) - sp[q].d, db = mk_v3_dot(sp[q].n, b->p) - sp[q].d;
-            if (da <= 0) dst[m++] = *a;
-            if ((da <= 0) != (db <= 0) && m < MK_MF_MAX) {
+            int ina = da <= sp[q].slop, inb = db <= sp[q].slop;
+            if (ina) dst[m++] = *a;
+            if (ina == inb) continue;
+            if ((ina ? da : db) > 0) {
+                /* The inside end lies in the slop strip and stands for the crossing;
+                 * when leaving, the polygon now runs along plane q from it. */
+                if (ina) {
+                    dst[m - 1].ref_edge = q;
+                    dst[m - 1].edge = sp[q].id;
+                }
+                continue;
+            }
+            {
                 clip_vert *x = &dst[m++];
                 x->p = mk_v3_lerp(a->p, b->p, da / (da - db));
                 crossing(ref, inc, q, sp, a, x);
-                if (da <= 0) { /* leaving: the next edge runs along plane q */
+                if (ina) { /* leaving: the next edge runs along plane q */
                     x->ref_edge = q;
                     x->edge = sp[q].id;
                 } else { /* entering: the rest of a's edge */
@@ -377,22 +371,29 @@ static int clip_polygon(const mk_feat *ref, const mk_feat *inc, const side_plane
 
 static int clip_segment(const mk_feat *ref, const mk_feat *inc, const side_plane *sp, int nsp, clip_vert *out)
 {
-    int q, k;
+    int q, k, n = 2;
     out[0].p = inc->v[0];
     out[1].p = inc->v[1];
     out[0].fref = out[1].fref = ref->id;
     out[0].finc = inc->vid[0];
     out[1].finc = inc->vid[1];
     for (q = 0; q < nsp; ++q) {
-        mk_real d0 = mk_v3_dot(sp[q].n, out[0].p) - sp[q].d, d1 = mk_v3_dot(sp[q].n, out[1].p) - sp[q].d;
-        if (d0 > 0 && d1 > 0) return 0;
-        if (d0 <= 0 && d1 <= 0) continue;
-        k = d0 > 0 ? 0 : 1;
+        mk_real d0 = mk_v3_dot(sp[q].n, out[0].p) - sp[q].d, d1 = n == 2 ? mk_v3_dot(sp[q].n, out[1].p) - sp[q].d : d0;
+        int in0 = d0 <= sp[q].slop, in1 = d1 <= sp[q].slop;
+        if (!in0 && !in1) return 0;
+        if (in0 && in1) continue;
+        k = in0 ? 1 : 0; /* the end outside */
+        if ((in0 ? d0 : d1) > 0) {
+            /* The inside end lies in the slop strip: it is all that is left. */
+            if (k == 0) out[0] = out[1];
+            n = 1;
+            continue;
+        }
         out[k].p = mk_v3_lerp(out[0].p, out[1].p, d0 / (d0 - d1));
         out[k].fref = sp[q].id;
         out[k].finc = inc->eid[0];
     }
-    return 2;
+    return n;
 }
 
 /* The clip prism and the depths follow the contact normal n rather than the
@@ -448,20 +449,49 @@ static int parallel(const mk_feat *sa, const mk_feat *sb)
     return mk_v3_len(mk_v3_cross(ua, ub)) <= MK_MF_SIN_TOL * mk_v3_len(ua) * mk_v3_len(ub);
 }
 
-void mk_mf_from_closest(mk_mf *m, const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_vec3 n, mk_vec3 ca,
-                        mk_vec3 cb, mk_real dist)
+/* Which face to clip against when both face the normal within the
+ * tolerance: a true face before a sampled cap, else the better aligned one,
+ * which is the exact minimum axis. Returns 1 for A's face, 0 for B's. */
+static int pick_a(const mk_feat *fa, const mk_feat *fb, mk_vec3 n)
 {
+    if (fa->exact != fb->exact) return fa->exact;
+    return -mk_v3_dot(fb->normal, n) <= mk_v3_dot(fa->normal, n);
+}
+
+void mk_mf_from_closest(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk_vec3 n, mk_vec3 ca, mk_vec3 cb,
+                        mk_real dist)
+{
+    const mk_shape *a = p->a, *b = p->b;
     mk_feat fa, fb, sa, sb;
     mk_real ra = a->radius, rb = b->radius, cos_tol = mk_sqrt_(1 - MK_MF_SIN_TOL * MK_MF_SIN_TOL);
-    int a_ok, b_ok;
+    int a_ok, b_ok, keep;
     m->count = 0;
     mk_support_feature(a, n, &fa);
-    mk_support_feature(b, mk_mat3_tmul_v3(r->R, mk_v3_neg(n)), &fb);
-    mk_feat_transform(&fb, r);
+    mk_support_feature(b, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &fb);
+    mk_feat_transform(&fb, p);
     a_ok = fa.count > 2 && mk_v3_dot(fa.normal, n) >= cos_tol;
     b_ok = fb.count > 2 && -mk_v3_dot(fb.normal, n) >= cos_tol;
-    if (a_ok && b_ok && fb.exact && !fa.exact) a_ok = 0; /* a true face beats a sampled cap */
-    m->normal = n;
+    /* Hysteresis: two polytope faces that face each other, one of which was
+     * last frame's reference. On a rocking stack the exact minimum axis swaps
+     * between the two faces every few frames; each swap would rename every
+     * point and tilt the normal, so while last frame's face still faces the
+     * normal within the tolerance the pair keeps it and takes its normal.
+     * That costs exactness (depth along a face tilted by up to the tolerance
+     * from the exact axis) on warm frames only; a cold call, or a new face,
+     * clips against the exact minimum axis. */
+    keep = 0;
+    if (cache && fa.count > 2 && fb.count > 2 && fa.exact && fb.exact) {
+        if (a_ok && cache->reference == 1 && cache->face == fa.id) keep = 1;
+        if (b_ok && cache->reference == 2 && cache->face == fb.id) keep = 2;
+    }
+    if (keep) {
+        a_ok = keep == 1;
+        b_ok = keep == 2;
+    } else if (a_ok && b_ok) {
+        a_ok = pick_a(&fa, &fb, n);
+        b_ok = !a_ok;
+    }
+    m->normal = keep == 1 ? fa.normal : keep == 2 ? mk_v3_neg(fb.normal) : n;
     if (a_ok) {
         mk_mf_clip(m, &fa, 1, &fb, ra, rb);
     } else if (b_ok) {
@@ -469,20 +499,35 @@ void mk_mf_from_closest(mk_mf *m, const mk_shape *a, const mk_shape *b, const mk
     } else if (support_segment(&fa, n, &sa) && support_segment(&fb, mk_v3_neg(n), &sb) && parallel(&sa, &sb)) {
         mk_mf_clip(m, &sa, 1, &sb, ra, rb);
     }
+    if (cache) {
+        cache->reference = m->count == 0 ? 0 : a_ok ? 1 : b_ok ? 2 : 0;
+        cache->face = a_ok ? fa.id : fb.id;
+    }
     if (m->count == 0) {
         /* Vertex contacts, crossing edges, or clipping lost the witness: the closest points themselves. */
-        mk_vec3 bl = mk_mat3_tmul_v3(r->R, mk_v3_sub(cb, r->t));
+        mk_vec3 bl = mk_mat3_tmul_v3(p->r, mk_v3_sub(cb, p->t));
+        m->normal = n;
         mk_mf_add(m, mk_v3_mad(ca, ra, n), ra + rb - dist, mk_feature_at(a, ca, n),
-                  mk_feature_at(b, bl, mk_mat3_tmul_v3(r->R, mk_v3_neg(n))));
+                  mk_feature_at(b, bl, mk_mat3_tmul_v3(p->r, mk_v3_neg(n))));
     }
+}
+
+void mk_mf_from_hit(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk_hit h)
+{
+    mk_real ra = p->a->radius, rb = p->b->radius;
+    if (h.distance > m->margin) return;
+    mk_mf_from_closest(m, p, cache, h.normal, mk_v3_mad(h.a, -ra, h.normal), mk_v3_mad(h.b, rb, h.normal),
+                       h.distance + ra + rb);
 }
 
 /* ---- reduction ---------------------------------------------------------- */
 
-/* Scores below are compared with a bias: a later candidate must beat the
- * current best by 5 % (depth: by 1e-4 of the patch size), so near-ties
- * resolve to the earlier candidate, and candidate order comes from the
- * features, which do not change between frames (Box3D uses the same idea). */
+/* The deepest candidate is kept exactly (ties within round-off of the patch
+ * size go to the earlier candidate), so the manifold's deepest depth is the
+ * exact penetration. The area scores are compared with a bias: a later
+ * candidate must beat the current best by 5 %, so near-ties resolve to the
+ * earlier candidate, and candidate order comes from the features, which do
+ * not change between frames (Box3D uses the same idea). */
 #define REDUCE_BIAS MK_REAL(0.95)
 
 static mk_real area(mk_vec3 n, mk_vec3 a, mk_vec3 b, mk_vec3 c)
@@ -499,7 +544,7 @@ void mk_mf_reduce(mk_mf *m)
     if (m->count <= MK_MANIFOLD_MAX_POINTS) return;
     for (i = 1; i < m->count; ++i) extent = mk_max(extent, mk_v3_max_abs(mk_v3_sub(m->p[i].pa, m->p[0].pa)));
     for (i = 1; i < m->count; ++i)
-        if (m->p[i].depth > m->p[k[0]].depth + MK_REAL(1e-4) * extent) k[0] = i;
+        if (m->p[i].depth > m->p[k[0]].depth + 64 * MK_REAL_EPSILON * extent) k[0] = i;
     for (best = 0, i = 0; i < m->count; ++i) {
         mk_vec3 d = mk_v3_sub(m->p[i].pa, m->p[k[0]].pa);
         mk_real s = mk_v3_len2(mk_v3_mad(d, -mk_v3_dot(d, n), n));

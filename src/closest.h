@@ -32,6 +32,12 @@ mk_hit mk_closest_capsule_capsule(mk_real ha, mk_vec3 u, mk_real ra, mk_vec3 c, 
 /* Any convex shape A against the half-space B (support of A along -n). */
 mk_hit mk_closest_shape_plane(const mk_pair *p);
 
+/* The GJK/EPA answer (with the polish) for a pair already in A's frame: what
+ * mk_distance runs for pairs without a closed form, for callers that build
+ * the pair themselves (mk_collide). MK_ERR_UNSUPPORTED when GJK or EPA is
+ * left out of the build. `cache` may be NULL. */
+mk_status mk_pair_distance(const mk_pair *p, mk_gjk_cache *cache, mk_hit *out);
+
 /* Closest points of segments [p0, p1] and [q0, q1]: parameters s, t in [0, 1].
  * Parallel segments get the midpoint of the overlap of their projections, so
  * the answer is symmetric and stable under small motions. */

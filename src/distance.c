@@ -168,6 +168,21 @@ static mk_status iterative(const mk_pair *p, mk_gjk_cache *cache, answer *ans)
 }
 #endif
 
+mk_status mk_pair_distance(const mk_pair *p, mk_gjk_cache *cache, mk_hit *out)
+{
+#ifdef MK_WITHOUT_GJK
+    (void)p;
+    (void)cache;
+    (void)out;
+    return MK_ERR_UNSUPPORTED;
+#else
+    answer ans;
+    mk_status st = iterative(p, cache, &ans);
+    if (st == MK_OK) *out = ans.hit;
+    return st;
+#endif
+}
+
 /* ---- composition ---------------------------------------------------------- */
 
 /* Runs a path in the frame of its first shape: A's rotation goes to *ra for

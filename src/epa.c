@@ -1,9 +1,11 @@
 /* epa.c: expanding polytope with silhouette removal, fixed capacity. */
 #include "epa.h"
 
+/* Indices are 16-bit: capacities stay far below 32767, and the face array
+ * is most of EPA's stack. */
 typedef struct epa_face {
-    int v[3];              /* counter-clockwise seen from outside */
-    int adj[3];            /* face across edge (v[i], v[i+1]) */
+    short v[3];            /* counter-clockwise seen from outside */
+    short adj[3];          /* face across edge (v[i], v[i+1]) */
     unsigned char edge[3]; /* index of that edge in the adjacent face */
     unsigned char live;
     mk_vec3 n;             /* unit outward normal */
@@ -16,7 +18,7 @@ typedef struct epa_poly {
     int nv, nf, nfree;
     mk_cso_vertex v[MK_EPA_MAX_VERTICES];
     epa_face f[MK_EPA_MAX_FACES];
-    int free_faces[MK_EPA_MAX_FACES];
+    short free_faces[MK_EPA_MAX_FACES];
 } epa_poly;
 
 /* Sets up face f over vertices (a, b, c); 0 if it is degenerate or has the
@@ -27,9 +29,9 @@ static int face_set(epa_poly *P, int f, int a, int b, int c)
     mk_vec3 wa = P->v[a].w, wb = P->v[b].w, wc = P->v[c].w;
     mk_vec3 n = mk_v3_cross(mk_v3_sub(wb, wa), mk_v3_sub(wc, wa));
     mk_real l = mk_v3_len(n);
-    F->v[0] = a;
-    F->v[1] = b;
-    F->v[2] = c;
+    F->v[0] = (short)a;
+    F->v[1] = (short)b;
+    F->v[2] = (short)c;
     F->live = 1;
     if (!(l > 0)) return 0;
     F->n = mk_v3_scale(n, 1 / l);
@@ -46,9 +48,9 @@ static int face_alloc(epa_poly *P)
 
 static void link(epa_poly *P, int f, int i, int g, int j)
 {
-    P->f[f].adj[i] = g;
+    P->f[f].adj[i] = (short)g;
     P->f[f].edge[i] = (unsigned char)j;
-    P->f[g].adj[j] = f;
+    P->f[g].adj[j] = (short)f;
     P->f[g].edge[j] = (unsigned char)i;
 }
 
@@ -170,13 +172,14 @@ static int known_vertex(const epa_poly *P, const mk_cso_vertex *w)
  * abandoned, so partial updates do not matter. */
 static int expand(epa_poly *P, int f0, int wi)
 {
-    int stack_f[MK_EPA_MAX_FACES], stack_e[MK_EPA_MAX_FACES], removed[MK_EPA_MAX_FACES];
-    int hz_g[MK_EPA_MAX_FACES], hz_j[MK_EPA_MAX_FACES], hz_a[MK_EPA_MAX_FACES], hz_b[MK_EPA_MAX_FACES], nf_new[MK_EPA_MAX_FACES];
+    short stack_f[MK_EPA_MAX_FACES], removed[MK_EPA_MAX_FACES], nf_new[MK_EPA_MAX_FACES];
+    short hz_g[MK_EPA_MAX_FACES], hz_a[MK_EPA_MAX_FACES], hz_b[MK_EPA_MAX_FACES];
+    unsigned char stack_e[MK_EPA_MAX_FACES], hz_j[MK_EPA_MAX_FACES];
     int sp = 0, nr = 0, nh = 0, k, m;
     mk_vec3 w = P->v[wi].w;
     P->f[f0].live = 0;
-    removed[nr++] = f0;
-    stack_f[sp] = f0;
+    removed[nr++] = (short)f0;
+    stack_f[sp] = (short)f0;
     stack_e[sp++] = 0;
     while (sp > 0) {
         int f = stack_f[sp - 1], i = stack_e[sp - 1], g, j;
@@ -184,18 +187,18 @@ static int expand(epa_poly *P, int f0, int wi)
             --sp;
             continue;
         }
-        stack_e[sp - 1] = i + 1;
+        stack_e[sp - 1] = (unsigned char)(i + 1);
         g = P->f[f].adj[i];
         j = P->f[f].edge[i];
         if (!P->f[g].live) continue;
         if (mk_v3_dot(P->f[g].n, w) - P->f[g].dist > P->tol) {
             P->f[g].live = 0;
-            removed[nr++] = g;
-            stack_f[sp] = g;
+            removed[nr++] = (short)g;
+            stack_f[sp] = (short)g;
             stack_e[sp++] = 0;
         } else {
-            hz_g[nh] = g;
-            hz_j[nh] = j;
+            hz_g[nh] = (short)g;
+            hz_j[nh] = (unsigned char)j;
             hz_a[nh] = P->f[f].v[i];
             hz_b[nh] = P->f[f].v[(i + 1) % 3];
             nh++;
@@ -207,7 +210,7 @@ static int expand(epa_poly *P, int f0, int wi)
         int f = face_alloc(P);
         if (f < 0 || !face_set(P, f, hz_a[k], hz_b[k], wi)) return 0;
         link(P, f, 0, hz_g[k], hz_j[k]);
-        nf_new[k] = f;
+        nf_new[k] = (short)f;
     }
     /* Close the fan: the face over (a, b) meets the face over (b, c) along (b, w). */
     for (k = 0; k < nh; ++k) {

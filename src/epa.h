@@ -18,7 +18,13 @@
 
 #include "gjk.h"
 
-#define MK_EPA_MAX_VERTICES 64
+/* Bullet and Jolt use the same capacity. Polytope pairs converge in a
+ * handful of vertices; round CSOs (cylinders, cones) use it up, and their
+ * error falls with its square. Stack use is about 120 bytes a vertex
+ * (15 KB at 128); a build may lower it with -DMK_EPA_MAX_VERTICES=n (n >= 8). */
+#ifndef MK_EPA_MAX_VERTICES
+#  define MK_EPA_MAX_VERTICES 128
+#endif
 #define MK_EPA_MAX_FACES (2 * MK_EPA_MAX_VERTICES)
 
 typedef struct mk_epa_result {

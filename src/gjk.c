@@ -2,13 +2,17 @@
 #include "gjk.h"
 
 /* ---- signed volumes (Montanari, Petrinic, Barbieri 2017) --------------------
- * Each solver gets the points of a (sub)simplex and returns the sub-simplex
- * whose relative interior holds the point nearest the origin, with its
- * barycentric weights. The origin's barycentric coordinates are ratios of
- * signed volumes (areas, lengths) taken in the best-conditioned projection;
- * a vertex whose coordinate has the wrong sign (or is zero) is dropped by
- * recursing on the opposite face. A degenerate simplex has no sign to agree
- * with, so every face gets tried: no division by a vanishing determinant. */
+ * Each solver gets a (sub)simplex of s (vertex indices ascending, the newest
+ * last) and returns the sub-simplex whose relative interior holds the point
+ * nearest the origin, with its barycentric weights. The origin's barycentric
+ * coordinates are ratios of signed volumes: for a triangle, the areas of the
+ * sub-triangles at the origin's projection p0 measured along the normal,
+ * n . ((s_j - p0) x (s_k - p0)), taken about p0 so their rounding scales with
+ * the triangle rather than with its distance from the origin. A vertex whose
+ * coordinate is not positive is dropped by recursing on the opposite face;
+ * a degenerate simplex has no positive coordinates, so every face gets tried:
+ * no division by a vanishing determinant, and a NaN (overflow) never counts as
+ * inside. */
 
 typedef struct sv_sol {
     int n;
@@ -18,157 +22,134 @@ typedef struct sv_sol {
     mk_real vv;   /* |v|^2 */
 } sv_sol;
 
-static int same_sign(mk_real a, mk_real b) { return (a > 0 && b > 0) || (a < 0 && b < 0); }
-
-static int max_abs_axis(mk_vec3 v)
-{
-    mk_real x = mk_fabs_(v.x), y = mk_fabs_(v.y), z = mk_fabs_(v.z);
-    return (x >= y && x >= z) ? 0 : (y >= z ? 1 : 2);
-}
-
-static mk_real axis(mk_vec3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
-
-static void sol_vertex(const mk_vec3 *w, int i, sv_sol *out)
+static void sol_vertex(const mk_cso_vertex *s, int i, sv_sol *out)
 {
     out->n = 1;
     out->idx[0] = i;
     out->l[0] = 1;
-    out->v = w[i];
-    out->vv = mk_v3_len2(w[i]);
+    out->v = s[i].w;
+    out->vv = mk_v3_len2(s[i].w);
 }
 
-/* Keeps the better of two candidates in *best. NaN distances never win. */
-static void sol_keep(sv_sol *best, const sv_sol *c)
+/* Segment (i, j). */
+static void sv_1d(const mk_cso_vertex *s, int i, int j, sv_sol *out)
 {
-    if (c->vv < best->vv || !(best->vv == best->vv)) *best = *c;
-}
-
-/* Segment (i, j), i < j. */
-static void sv_1d(const mk_vec3 *w, int i, int j, sv_sol *out)
-{
-    mk_vec3 s1 = w[i], s2 = w[j], t = mk_v3_sub(s2, s1), p0;
-    mk_real tt = mk_v3_len2(t), mu, c1, c2;
-    int k;
-    if (!(tt > 0)) {
-        sol_vertex(w, j, out);
-        return;
-    }
-    p0 = mk_v3_mad(s1, -mk_v3_dot(s1, t) / tt, t); /* the origin projected on the line */
-    k = max_abs_axis(t);
-    mu = axis(s1, k) - axis(s2, k);
-    c1 = axis(p0, k) - axis(s2, k); /* weight of s1, times mu */
-    c2 = axis(s1, k) - axis(p0, k); /* weight of s2, times mu */
-    if (!same_sign(mu, c2)) {
-        sol_vertex(w, i, out);
-    } else if (!same_sign(mu, c1)) {
-        sol_vertex(w, j, out);
+    mk_vec3 a = s[i].w, t = mk_v3_sub(s[j].w, a);
+    mk_real tt = mk_v3_len2(t), lb = -mk_v3_dot(a, t) / tt; /* weight of j */
+    if (!(lb < 1)) { /* also tt == 0 (NaN) */
+        sol_vertex(s, j, out);
+    } else if (!(lb > 0)) {
+        sol_vertex(s, i, out);
     } else {
         out->n = 2;
         out->idx[0] = i;
         out->idx[1] = j;
-        out->l[0] = c1 / mu;
-        out->l[1] = c2 / mu;
-        out->v = p0;
-        out->vv = mk_v3_len2(p0);
+        out->l[0] = 1 - lb;
+        out->l[1] = lb;
+        out->v = mk_v3_mad(a, lb, t);
+        out->vv = mk_v3_len2(out->v);
     }
 }
 
-/* Triangle (i, j, k), i < j < k. The areas are taken in the coordinate plane
- * the triangle projects to with the largest area. */
-static void sv_2d(const mk_vec3 *w, int i, int j, int k, sv_sol *out)
+/* Triangle (i, j, k). */
+static void sv_2d(const mk_cso_vertex *s, int i, int j, int k, sv_sol *out)
 {
-    const int ids[3] = {i, j, k};
-    mk_vec3 s1 = w[i], s2 = w[j], s3 = w[k];
-    mk_vec3 n = mk_v3_cross(mk_v3_sub(s2, s1), mk_v3_sub(s3, s1)), p0;
-    mk_real nn = mk_v3_len2(n), mu = 0, c[3] = {0, 0, 0};
-    int m;
+    mk_vec3 a = s[i].w, b = s[j].w, c = s[k].w;
+    mk_vec3 n = mk_v3_cross(mk_v3_sub(b, a), mk_v3_sub(c, a));
+    mk_real nn = mk_v3_len2(n), ca = 0, cb = 0, cc = 0;
+    sv_sol e;
     if (nn > 0) {
-        int ax = max_abs_axis(n), u = (ax + 1) % 3, v = (ax + 2) % 3; /* (u, v) cyclic after ax: area sign = sign of n_ax */
-        mk_real px, py, x1, y1, x2, y2, x3, y3;
-        p0 = mk_v3_scale(n, mk_v3_dot(s1, n) / nn); /* the origin projected on the plane */
-        px = axis(p0, u);
-        py = axis(p0, v);
-        x1 = axis(s1, u) - px;
-        y1 = axis(s1, v) - py;
-        x2 = axis(s2, u) - px;
-        y2 = axis(s2, v) - py;
-        x3 = axis(s3, u) - px;
-        y3 = axis(s3, v) - py;
-        mu = axis(n, ax);
-        c[0] = x2 * y3 - y2 * x3; /* area (p0, s2, s3): weight of s1 */
-        c[1] = x3 * y1 - y3 * x1;
-        c[2] = x1 * y2 - y1 * x2;
-        if (same_sign(mu, c[0]) && same_sign(mu, c[1]) && same_sign(mu, c[2])) {
-            mk_real sum = c[0] + c[1] + c[2];
+        mk_vec3 p0 = mk_v3_scale(n, mk_v3_dot(a, n) / nn); /* the origin projected on the plane */
+        mk_vec3 ap = mk_v3_sub(a, p0), bp = mk_v3_sub(b, p0), cp = mk_v3_sub(c, p0);
+        ca = mk_v3_dot(n, mk_v3_cross(bp, cp));
+        cb = mk_v3_dot(n, mk_v3_cross(cp, ap));
+        cc = mk_v3_dot(n, mk_v3_cross(ap, bp));
+        if (ca > 0 && cb > 0 && cc > 0) {
+            mk_real sum = ca + cb + cc;
             out->n = 3;
-            for (m = 0; m < 3; ++m) {
-                out->idx[m] = ids[m];
-                out->l[m] = c[m] / sum;
-            }
+            out->idx[0] = i;
+            out->idx[1] = j;
+            out->idx[2] = k;
+            out->l[0] = ca / sum;
+            out->l[1] = cb / sum;
+            out->l[2] = cc / sum;
             out->v = p0;
             out->vv = mk_v3_len2(p0);
             return;
         }
     }
     /* Outside (or degenerate): the nearest point is on an edge whose opposite
-     * vertex has the wrong sign (every edge, for a degenerate triangle). */
+     * vertex has a non-positive coordinate (every edge, when degenerate). */
     out->n = 0;
     out->vv = (mk_real)HUGE_VAL;
-    for (m = 0; m < 3; ++m) {
-        sv_sol e;
-        if (same_sign(mu, c[m])) continue;
-        sv_1d(w, ids[m == 0 ? 1 : 0], ids[m == 2 ? 1 : 2], &e);
-        sol_keep(out, &e);
+    if (!(ca > 0)) sv_1d(s, j, k, out);
+    if (!(cb > 0)) {
+        sv_1d(s, i, k, &e);
+        if (e.vv < out->vv) *out = e;
     }
-    if (out->n == 0) sol_vertex(w, k, out); /* only reached with NaN input */
+    if (!(cc > 0)) {
+        sv_1d(s, i, j, &e);
+        if (e.vv < out->vv) *out = e;
+    }
+    if (!(out->vv < (mk_real)HUGE_VAL)) sol_vertex(s, k, out); /* only reached with NaN input */
 }
 
-static void sv_3d(const mk_vec3 *w, sv_sol *out)
+static void sv_3d(const mk_cso_vertex *s, sv_sol *out)
 {
-    static const int face[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
-    mk_vec3 s1 = w[0], s2 = w[1], s3 = w[2], s4 = w[3];
-    mk_vec3 x34 = mk_v3_cross(s3, s4);
-    mk_real c[4], mu;
-    int m;
+    mk_vec3 w0 = s[0].w, w1 = s[1].w, w2 = s[2].w, w3 = s[3].w, x23 = mk_v3_cross(w2, w3);
     /* c[j]: signed volume of the tetrahedron with vertex j replaced by the origin. */
-    c[0] = mk_v3_dot(s2, x34);
-    c[1] = -mk_v3_dot(s1, x34);
-    c[2] = mk_v3_dot(s1, mk_v3_cross(s2, s4));
-    c[3] = -mk_v3_dot(s1, mk_v3_cross(s2, s3));
-    mu = c[0] + c[1] + c[2] + c[3];
-    if (same_sign(mu, c[0]) && same_sign(mu, c[1]) && same_sign(mu, c[2]) && same_sign(mu, c[3])) {
+    mk_real c0 = mk_v3_dot(w1, x23), c1 = -mk_v3_dot(w0, x23);
+    mk_real c2 = mk_v3_dot(w0, mk_v3_cross(w1, w3)), c3 = -mk_v3_dot(w0, mk_v3_cross(w1, w2));
+    mk_real mu = c0 + c1 + c2 + c3;
+    sv_sol f;
+    if (mu < 0) { /* orient so that inside means all positive */
+        c0 = -c0;
+        c1 = -c1;
+        c2 = -c2;
+        c3 = -c3;
+        mu = -mu;
+    }
+    if (c0 > 0 && c1 > 0 && c2 > 0 && c3 > 0) {
         out->n = 4;
-        for (m = 0; m < 4; ++m) {
-            out->idx[m] = m;
-            out->l[m] = c[m] / mu;
-        }
+        out->idx[0] = 0;
+        out->idx[1] = 1;
+        out->idx[2] = 2;
+        out->idx[3] = 3;
+        out->l[0] = c0 / mu;
+        out->l[1] = c1 / mu;
+        out->l[2] = c2 / mu;
+        out->l[3] = c3 / mu;
         out->v = mk_v3_zero();
         out->vv = 0;
         return;
     }
     out->n = 0;
     out->vv = (mk_real)HUGE_VAL;
-    for (m = 0; m < 4; ++m) {
-        sv_sol f;
-        if (same_sign(mu, c[m])) continue;
-        sv_2d(w, face[m][0], face[m][1], face[m][2], &f);
-        sol_keep(out, &f);
+    if (!(c0 > 0)) sv_2d(s, 1, 2, 3, out);
+    if (!(c1 > 0)) {
+        sv_2d(s, 0, 2, 3, &f);
+        if (f.vv < out->vv) *out = f;
     }
-    if (out->n == 0) sol_vertex(w, 3, out);
+    if (!(c2 > 0)) {
+        sv_2d(s, 0, 1, 3, &f);
+        if (f.vv < out->vv) *out = f;
+    }
+    if (!(c3 > 0)) {
+        sv_2d(s, 0, 1, 2, &f);
+        if (f.vv < out->vv) *out = f;
+    }
+    if (!(out->vv < (mk_real)HUGE_VAL)) sol_vertex(s, 3, out);
 }
 
-/* The sub-simplex of s nearest the origin, from the positions alone; s is
- * not touched, so a step that makes no progress costs no restore. */
+/* The sub-simplex of s nearest the origin; s is not touched, so a step that
+ * makes no progress costs no restore. */
 static void solve(const mk_simplex *s, sv_sol *sol)
 {
-    mk_vec3 w[4];
-    int k;
-    for (k = 0; k < s->n; ++k) w[k] = s->v[k].w;
     switch (s->n) {
-    case 1: sol_vertex(w, 0, sol); break;
-    case 2: sv_1d(w, 0, 1, sol); break;
-    case 3: sv_2d(w, 0, 1, 2, sol); break;
-    default: sv_3d(w, sol); break;
+    case 1: sol_vertex(s->v, 0, sol); break;
+    case 2: sv_1d(s->v, 0, 1, sol); break;
+    case 3: sv_2d(s->v, 0, 1, 2, sol); break;
+    default: sv_3d(s->v, sol); break;
     }
 }
 

@@ -56,15 +56,21 @@ typedef struct mk_centry { uint32_t who; uint32_t next; } mk_centry; /* who = sl
 
 typedef struct mk_range { int64_t lo[3], hi[3]; } mk_range;
 
+/* The per-proxy fields of the every-update loops, together so that a
+ * candidate's re-test touches one cache line per proxy, not three. */
+typedef struct mk_gproxy {
+    double travel;     /* sum over updates of the largest move of any face */
+    double refile_at;  /* travel at which a face may first reach a cell wall */
+    uint8_t st;        /* REG_* | ST_* */
+} mk_gproxy;
+
 struct mk_hgrid {
     /* per proxy slot */
     int32_t *level;
     mk_range *range;        /* native cell range */
-    uint8_t *st;            /* REG_* | ST_* */
+    mk_gproxy *px;          /* what the per-update loops read, one record per slot */
     uint32_t *ov_pos;       /* index in oversized[] */
     uint32_t *todo; int todo_count; /* proxies to file in this update */
-    double *travel;         /* sum over updates of the largest move of any face */
-    double *refile_at;      /* travel at which a face may first reach a cell wall */
     int updates;            /* since travel was last reset to 0 */
     uint32_t *oversized; int ov_count;
     /* levels */
@@ -455,7 +461,7 @@ static void refile_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level
 {
     unfile_range(g, slot, level, o, n, guest);
     file_range(bp, g, slot, level, n, o, guest);
-    g->st[slot] |= ST_REFILED;
+    g->px[slot].st |= ST_REFILED;
 }
 
 static void ov_add(struct mk_hgrid *g, uint32_t slot)
@@ -475,8 +481,8 @@ static void ov_remove(struct mk_hgrid *g, uint32_t slot)
 static void unfile(struct mk_hgrid *g, uint32_t slot)
 {
     int i;
-    if ((g->st[slot] & REG_MASK) == REG_OVERSIZED) ov_remove(g, slot);
-    if ((g->st[slot] & REG_MASK) == REG_CELLS) {
+    if ((g->px[slot].st & REG_MASK) == REG_OVERSIZED) ov_remove(g, slot);
+    if ((g->px[slot].st & REG_MASK) == REG_CELLS) {
         int own = g->level[slot];
         unfile_range(g, slot, own, &g->range[slot], NULL, 0);
         for (i = 0; i < g->used_count; ++i) {
@@ -487,7 +493,7 @@ static void unfile(struct mk_hgrid *g, uint32_t slot)
         }
         g->natives[own - MK_LEVEL_MIN_]--;
     }
-    g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | ST_GONE);
+    g->px[slot].st = (uint8_t)((g->px[slot].st & ~REG_MASK) | ST_GONE);
 }
 
 /* A level comes into use: every finer proxy already filed becomes its guest. */
@@ -497,7 +503,7 @@ static void open_level(mk_bp *bp, struct mk_hgrid *g, int level)
     use_level_list(g, level);
     for (s = 0; s < (uint32_t)bp->hi_slot && g->fail == MK_OK; ++s) {
         mk_range r;
-        if ((g->st[s] & REG_MASK) != REG_CELLS || g->level[s] >= level) continue;
+        if ((g->px[s].st & REG_MASK) != REG_CELLS || g->level[s] >= level) continue;
         coarser(&g->range[s], level - g->level[s], &r);
         file_range(bp, g, s, level, &r, NULL, 1);
     }
@@ -508,13 +514,13 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
     const mk_aabb *b = &bp->box[slot];
     int i, own;
     uint32_t s;
-    g->st[slot] |= ST_REFILED;
+    g->px[slot].st |= ST_REFILED;
     if (is_oversized(b)) {
         /* Everything is its candidate, filed or oversized. */
         for (s = 0; s < (uint32_t)bp->hi_slot; ++s)
-            if (g->st[s] & REG_MASK) candidate(bp, g, slot, s);
-        g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | REG_OVERSIZED);
-        g->refile_at[slot] = 0;
+            if (g->px[s].st & REG_MASK) candidate(bp, g, slot, s);
+        g->px[slot].st = (uint8_t)((g->px[slot].st & ~REG_MASK) | REG_OVERSIZED);
+        g->px[slot].refile_at = 0;
         ov_add(g, slot);
         return;
     }
@@ -522,9 +528,9 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
     if (!g->used[own - MK_LEVEL_MIN_]) open_level(bp, g, own);
     g->level[slot] = own;
     g->natives[own - MK_LEVEL_MIN_]++;
-    g->st[slot] = (uint8_t)((g->st[slot] & ~REG_MASK) | REG_CELLS);
+    g->px[slot].st = (uint8_t)((g->px[slot].st & ~REG_MASK) | REG_CELLS);
     range_at(b, own, &g->range[slot]); /* first filing: tight; re-filings add the margin */
-    g->refile_at[slot] = room_until(g->travel[slot], wall_room(b, &g->range[slot], own));
+    g->px[slot].refile_at = room_until(g->px[slot].travel, wall_room(b, &g->range[slot], own));
     file_range(bp, g, slot, own, &g->range[slot], NULL, 0);
     for (i = 0; i < g->used_count; ++i) {
         mk_range r;
@@ -542,10 +548,10 @@ static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const m
     int own = g->level[slot], i;
     mk_range r, o, old = g->range[slot];
     double room;
-    if ((g->st[slot] & REG_MASK) == REG_OVERSIZED && is_oversized(nb)) return 1; /* still everyone's candidate */
-    if ((g->st[slot] & REG_MASK) != REG_CELLS) return 0;
+    if ((g->px[slot].st & REG_MASK) == REG_OVERSIZED && is_oversized(nb)) return 1; /* still everyone's candidate */
+    if ((g->px[slot].st & REG_MASK) != REG_CELLS) return 0;
     room = wall_room(nb, &old, own);
-    if (room >= 0) { g->refile_at[slot] = room_until(g->travel[slot], room); return 1; }
+    if (room >= 0) { g->px[slot].refile_at = room_until(g->px[slot].travel, room); return 1; }
     /* Left its cells. The level is only reconsidered now: while the box
      * stays within them its size cannot be far off. */
     if (!keeps_level(nb, own)) return 0;
@@ -553,7 +559,7 @@ static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const m
      * the margin per update would leave it anyway, and gets its bare cells. */
     if (moved * inv_cell(own) < 0.0625) { if (!fat_range(nb, own, &r)) return 0; }
     else if (!range_fits(nb, own, &r)) return 0;
-    g->refile_at[slot] = room_until(g->travel[slot], wall_room(nb, &r, own));
+    g->px[slot].refile_at = room_until(g->px[slot].travel, wall_room(nb, &r, own));
     refile_range(bp, g, slot, own, &old, &r, 0);
     g->range[slot] = r;
     /* Cell walls of coarser levels are walls of this one too. */
@@ -572,7 +578,7 @@ static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const m
 static int still_candidates(const struct mk_hgrid *g, uint32_t a, uint32_t b)
 {
     mk_range r;
-    if ((g->st[a] | g->st[b]) & REG_OVERSIZED) return 1;
+    if ((g->px[a].st | g->px[b].st) & REG_OVERSIZED) return 1;
     if (g->level[a] == g->level[b]) return ranges_meet(&g->range[a], &g->range[b]);
     if (g->level[a] < g->level[b]) { coarser(&g->range[a], g->level[b] - g->level[a], &r); return ranges_meet(&r, &g->range[b]); }
     coarser(&g->range[b], g->level[a] - g->level[b], &r);
@@ -610,14 +616,14 @@ static uint32_t next_state(const mk_bp *bp, const struct mk_hgrid *g, uint32_t a
 {
     const uint32_t pair_bits = MK_PS_CAND | MK_PS_LIVE | MK_PS_REJECTED;
     uint32_t s = e->state;
-    uint8_t sa = g->st[a], sb = g->st[b];
+    uint8_t sa = g->px[a].st, sb = g->px[b].st;
     int overlap;
     if (!(sa & REG_MASK) || !(sb & REG_MASK) || !(s & MK_PS_CAND)) return s & ~pair_bits;
     if (((sa | sb) & ST_REFILED) && !still_candidates(g, a, b)) return s & ~pair_bits;
     if ((sa | sb) & ST_REFILTER) s &= ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
-    else if (g->travel[a] + g->travel[b] < (double)e->wake) return s;
+    else if (g->px[a].travel + g->px[b].travel < (double)e->wake) return s;
     overlap = mk_bp_overlap_(&bp->box[a], &bp->box[b]);
-    e->wake = wake_at(g->travel[a] + g->travel[b], margin(&bp->box[a], &bp->box[b], overlap));
+    e->wake = wake_at(g->px[a].travel + g->px[b].travel, margin(&bp->box[a], &bp->box[b], overlap));
     if (!overlap) return s & ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
     if (s & (MK_PS_LIVE | MK_PS_REJECTED)) return s;
     return s | (mk_bp_filter_pass_(bp, a, b) ? MK_PS_LIVE : MK_PS_REJECTED);
@@ -630,11 +636,11 @@ static void retest(mk_bp *bp, struct mk_hgrid *g, int all)
     for (i = 0; i < t->count; ++i) {
         mk_pair_entry *e = &t->e[i];
         uint32_t a = (uint32_t)(e->key >> 32), b = (uint32_t)e->key, s, old = e->state;
-        uint8_t sa = g->st[a], sb = g->st[b];
+        uint8_t sa = g->px[a].st, sb = g->px[b].st;
         if (!all && !((sa | sb) & ST_DIRTY)) continue;
         /* the common case: both filed as before, too little travel to matter
          * (every entry here has CAND: the grid sets it on insertion) */
-        if (!((sa | sb) & ST_SLOW) && g->travel[a] + g->travel[b] < (double)e->wake) continue;
+        if (!((sa | sb) & ST_SLOW) && g->px[a].travel + g->px[b].travel < (double)e->wake) continue;
         s = next_state(bp, g, a, b, e);
         e->state = s;
         if ((s ^ old) & (MK_PS_LIVE | MK_PS_CAND)) mk_pairs_touch_(bp, e);
@@ -648,12 +654,11 @@ static void restart_travel(mk_bp *bp, struct mk_hgrid *g)
     int i;
     if (++g->updates < 256) return;
     g->updates = 0;
-    memset(g->travel, 0, sizeof(double) * (size_t)bp->hi_slot);
-    memset(g->refile_at, 0, sizeof(double) * (size_t)bp->hi_slot);
+    for (i = 0; i < bp->hi_slot; ++i) g->px[i].travel = g->px[i].refile_at = 0;
     for (i = 0; i < bp->pairs.count; ++i) bp->pairs.e[i].wake = 0;
 }
 
-/* The largest move of any face from box o to box n (infinite when a side is). */
+/* The largest move of any face from box o to box n (NaN when a side is infinite). */
 static double face_travel(const mk_aabb *o, const mk_aabb *n)
 {
     const mk_real *ol = &o->lo.x, *oh = &o->hi.x, *nl = &n->lo.x, *nh = &n->hi.x;
@@ -661,9 +666,10 @@ static double face_travel(const mk_aabb *o, const mk_aabb *n)
     int k;
     for (k = 0; k < 3; ++k) {
         double dl = fabs((double)nl[k] - (double)ol[k]), dh = fabs((double)nh[k] - (double)oh[k]);
-        if (!(dl <= 1e300 && dh <= 1e300)) return HUGE_VAL; /* inf - inf: test always */
-        if (dl > d) d = dl;
-        if (dh > d) d = dh;
+        /* written so that a NaN (inf - inf) wins: NaN travel fails every
+         * "cannot have changed" test, so the proxy is always looked at */
+        if (!(dl <= d)) d = dl;
+        if (!(dh <= d)) d = dh;
     }
     return d;
 }
@@ -676,12 +682,10 @@ static int grid_arrays(struct mk_hgrid *g, grid_array_ *a)
     int n = 0;
     a[n].p = (void **)&g->level; a[n++].elem = sizeof *g->level;
     a[n].p = (void **)&g->range; a[n++].elem = sizeof *g->range;
-    a[n].p = (void **)&g->st; a[n++].elem = sizeof *g->st;
+    a[n].p = (void **)&g->px; a[n++].elem = sizeof *g->px;
     a[n].p = (void **)&g->ov_pos; a[n++].elem = sizeof *g->ov_pos;
     a[n].p = (void **)&g->todo; a[n++].elem = sizeof *g->todo;
     a[n].p = (void **)&g->oversized; a[n++].elem = sizeof *g->oversized;
-    a[n].p = (void **)&g->travel; a[n++].elem = sizeof *g->travel;
-    a[n].p = (void **)&g->refile_at; a[n++].elem = sizeof *g->refile_at;
     return n;
 }
 
@@ -693,7 +697,7 @@ static void reset_cells(struct mk_hgrid *g, int proxies)
     for (i = 0; i < g->ent_cap; ++i) g->ent[i].next = i + 1 < g->ent_cap ? (uint32_t)i + 1 : MK_NONE_;
     g->ent_free = 0;
     g->ent_used = 0;
-    memset(g->st, 0, (size_t)proxies);
+    for (i = 0; i < proxies; ++i) g->px[i].st = 0;
     memset(g->natives, 0, sizeof g->natives);
     memset(g->used, 0, sizeof g->used);
     g->used_count = 0;
@@ -703,7 +707,7 @@ static void reset_cells(struct mk_hgrid *g, int proxies)
 mk_status mk_hgrid_create_(mk_bp *bp)
 {
     struct mk_hgrid *g;
-    grid_array_ a[8];
+    grid_array_ a[6];
     int n, i;
     if (!(g = (struct mk_hgrid *)mk_bp_alloc_(bp, sizeof *g))) return MK_ERR_OUT_OF_MEMORY;
     memset(g, 0, sizeof *g);
@@ -722,8 +726,7 @@ mk_status mk_hgrid_create_(mk_bp *bp)
     if (!(g->cells = (mk_cell *)mk_bp_alloc_(bp, sizeof(mk_cell) * (size_t)g->cell_cap))) goto fail;
     if (!(g->ent = (mk_centry *)mk_bp_alloc_(bp, sizeof(mk_centry) * (size_t)g->ent_cap))) goto fail;
     if (!(g->index = (uint32_t *)mk_bp_alloc_(bp, sizeof(uint32_t) * (size_t)(g->index_mask + 1)))) goto fail;
-    memset(g->travel, 0, sizeof(double) * (size_t)bp->cap);
-    memset(g->refile_at, 0, sizeof(double) * (size_t)bp->cap);
+    memset(g->px, 0, sizeof *g->px * (size_t)bp->cap);
     reset_cells(g, bp->cap);
     return MK_OK;
 fail:
@@ -734,7 +737,7 @@ fail:
 void mk_hgrid_destroy_(mk_bp *bp)
 {
     struct mk_hgrid *g = bp->grid;
-    grid_array_ a[8];
+    grid_array_ a[6];
     int n, i;
     if (!g) return;
     n = grid_arrays(g, a);
@@ -785,13 +788,13 @@ static void take_changes(mk_bp *bp, struct mk_hgrid *g)
         uint32_t s = bp->dirty[i];
         uint8_t f = bp->flags[s];
         double moved;
-        g->st[s] |= (uint8_t)(ST_DIRTY | ((f & MK_PF_REFILTER) ? ST_REFILTER : 0));
+        g->px[s].st |= (uint8_t)(ST_DIRTY | ((f & MK_PF_REFILTER) ? ST_REFILTER : 0));
         if (f & MK_PF_DYING) { unfile(g, s); continue; }
         if (f & MK_PF_NEW) { g->todo[g->todo_count++] = s; continue; }
         if (!(f & MK_PF_MOVED)) continue;
         moved = face_travel(&bp->box[s], &bp->next[s]);
-        g->travel[s] += moved;
-        if (g->travel[s] < g->refile_at[s]) continue; /* no face can have reached a wall */
+        g->px[s].travel += moved;
+        if (g->px[s].travel < g->px[s].refile_at) continue; /* no face can have reached a wall */
         if (!refile_in_place(bp, g, s, &bp->next[s], moved)) {
             unfile(g, s);
             g->todo[g->todo_count++] = s;
@@ -818,9 +821,9 @@ mk_status mk_hgrid_update_(mk_bp *bp)
     }
     if (g->fail == MK_OK) retest(bp, g, all);
     if (all) {
-        for (i = 0; i < bp->hi_slot; ++i) g->st[i] &= REG_MASK;
+        for (i = 0; i < bp->hi_slot; ++i) g->px[i].st &= REG_MASK;
     } else {
-        for (i = 0; i < bp->dirty_count; ++i) g->st[bp->dirty[i]] &= REG_MASK;
+        for (i = 0; i < bp->dirty_count; ++i) g->px[bp->dirty[i]].st &= REG_MASK;
     }
     if (g->fail != MK_OK) return g->fail;
     bp->rebuild = 0;
@@ -833,7 +836,7 @@ static void linear_query(const mk_bp *bp, const struct mk_hgrid *g, mk_aabb q, m
 {
     uint32_t s;
     for (s = 0; s < (uint32_t)bp->hi_slot; ++s)
-        if ((g->st[s] & REG_MASK) && mk_bp_overlap_(&bp->box[s], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
+        if ((g->px[s].st & REG_MASK) && mk_bp_overlap_(&bp->box[s], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
 }
 
 /* Cells the query covers over all levels, or -1 if that is beyond reason

@@ -7,85 +7,39 @@
  * pairs name their features the same way. Pairs are written for one order of
  * shape types; the other order swaps the shapes and mirrors the result. */
 #include "manifold_internal.h"
-#include "shape_internal.h"
 
-typedef void (*pair_fn)(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache);
+/* A pair routine fills m (in A's frame) or refuses the pair. */
+typedef mk_status (*pair_fn)(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache);
 
 /* ---- closed forms ----------------------------------------------------------- */
 
-static void sphere_sphere(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+static mk_status sphere_sphere(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_real d = mk_v3_len(r->t);
-    (void)cache;
-    if (d - a->radius - b->radius > m->margin) return;
-    /* Concentric spheres have no preferred direction; +z of A is as good as any and stays fixed. */
-    mk_mf_from_closest(m, a, b, r, d > 0 ? mk_v3_scale(r->t, 1 / d) : mk_v3(0, 0, 1), mk_v3_zero(), r->t, d);
+    mk_real d = mk_v3_len(p->t);
+    if (d - p->a->radius - p->b->radius > m->margin) return MK_OK;
+    /* Concentric spheres have no preferred direction; +z of A, as mk_distance takes. */
+    mk_mf_from_closest(m, p, cache, d > 0 ? mk_v3_scale(p->t, 1 / d) : mk_v3(0, 0, 1), mk_v3_zero(), p->t, d);
+    return MK_OK;
 }
 
-static void capsule_sphere(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+static mk_status capsule_sphere(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_real h = a->u.capsule.half_height;
-    mk_vec3 c = r->t, q = mk_v3(0, 0, mk_clamp(c.z, -h, h)), diff = mk_v3_sub(c, q);
-    mk_real d = mk_v3_len(diff);
-    (void)cache;
-    if (d - a->radius - b->radius > m->margin) return;
-    mk_mf_from_closest(m, a, b, r, d > 0 ? mk_v3_scale(diff, 1 / d) : mk_v3(1, 0, 0), q, c, d);
+    mk_mf_from_hit(m, p, cache, mk_closest_capsule_sphere(p->a->u.capsule.half_height, mk_v3(0, 0, 1), p->a->radius, p->t, p->b->radius));
+    return MK_OK;
 }
 
-static void box_sphere(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+static mk_status box_sphere(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_vec3 h = a->u.half_extents, c = r->t;
-    mk_vec3 q = mk_v3(mk_clamp(c.x, -h.x, h.x), mk_clamp(c.y, -h.y, h.y), mk_clamp(c.z, -h.z, h.z));
-    mk_vec3 diff = mk_v3_sub(c, q);
-    mk_real d = mk_v3_len(diff);
-    (void)cache;
-    if (d > 0) {
-        if (d - a->radius - b->radius > m->margin) return;
-        mk_mf_from_closest(m, a, b, r, mk_v3_scale(diff, 1 / d), q, c, d);
-    } else {
-        /* Centre inside the core: leave through the nearest face. */
-        mk_real gap[3];
-        int i;
-        mk_vec3 n = mk_v3_zero();
-        gap[0] = h.x - mk_fabs_(c.x);
-        gap[1] = h.y - mk_fabs_(c.y);
-        gap[2] = h.z - mk_fabs_(c.z);
-        i = (gap[0] <= gap[1] && gap[0] <= gap[2]) ? 0 : (gap[1] <= gap[2] ? 1 : 2);
-        if (i == 0) { n.x = c.x >= 0 ? 1 : -1; q.x = n.x * h.x; }
-        if (i == 1) { n.y = c.y >= 0 ? 1 : -1; q.y = n.y * h.y; }
-        if (i == 2) { n.z = c.z >= 0 ? 1 : -1; q.z = n.z * h.z; }
-        mk_mf_from_closest(m, a, b, r, n, q, c, -gap[i]);
-    }
+    mk_mf_from_hit(m, p, cache, mk_closest_box_sphere(p->a->u.half_extents, p->a->radius, p->t, p->b->radius));
+    return MK_OK;
 }
 
-static void capsule_ends(const mk_shape *s, const mk_rel *r, mk_vec3 *p0, mk_vec3 *p1)
+/* Two parallel capsules give two points: mk_mf_from_hit clips the segments. */
+static mk_status capsule_capsule(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_vec3 axis = mk_v3_scale(r->R.c2, s->u.capsule.half_height);
-    *p0 = mk_v3_sub(r->t, axis);
-    *p1 = mk_v3_add(r->t, axis);
-}
-
-static void capsule_capsule(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
-{
-    mk_real ha = a->u.capsule.half_height, s, t, d;
-    mk_vec3 a0 = mk_v3(0, 0, -ha), a1 = mk_v3(0, 0, ha), b0, b1, pa, pb, n;
-    (void)cache;
-    capsule_ends(b, r, &b0, &b1);
-    mk_segment_closest(a0, a1, b0, b1, &s, &t);
-    pa = mk_v3_lerp(a0, a1, s);
-    pb = mk_v3_lerp(b0, b1, t);
-    d = mk_v3_dist(pa, pb);
-    if (d - a->radius - b->radius > m->margin) return;
-    if (d > 0) {
-        n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
-    } else {
-        /* The axes cross: separate along their common normal, towards B's centre. */
-        n = mk_v3_normalize(mk_v3_cross(mk_v3(0, 0, 1), r->R.c2));
-        if (mk_v3_len2(n) == 0) n = mk_v3_normalize(mk_v3(r->t.x, r->t.y, 0));
-        if (mk_v3_len2(n) == 0) n = mk_v3(1, 0, 0);
-        if (mk_v3_dot(n, r->t) < 0) n = mk_v3_neg(n);
-    }
-    mk_mf_from_closest(m, a, b, r, n, pa, pb, d);
+    mk_mf_from_hit(m, p, cache, mk_closest_capsule_capsule(p->a->u.capsule.half_height, mk_v3(0, 0, 1), p->a->radius, p->t, p->r.c2,
+                                                           p->b->u.capsule.half_height, p->b->radius));
+    return MK_OK;
 }
 
 /* Liang-Barsky: does segment p0-p1 meet the box [-h, h]? */
@@ -133,7 +87,7 @@ static mk_real segment_box_closest(mk_vec3 p0, mk_vec3 p1, mk_vec3 h, mk_vec3 *c
             int lo = k == 0 ? 1 : 0, hi = k == 2 ? 1 : 2, bits = ((i & 1) << lo) | ((i >> 1) << hi);
             mk_vec3 e0 = box_corner(h, bits), e1 = box_corner(h, bits | 1 << k), q, p;
             mk_real d2;
-            mk_segment_closest(e0, e1, p0, p1, &s, &t);
+            mk_segment_segment(e0, e1, p0, p1, &s, &t);
             q = mk_v3_lerp(e0, e1, s);
             p = mk_v3_lerp(p0, p1, t);
             d2 = mk_v3_len2(mk_v3_sub(p, q));
@@ -183,34 +137,38 @@ static void segment_box_deep(mk_vec3 p0, mk_vec3 p1, mk_vec3 h, mk_vec3 *n, mk_v
         /* The box edge along `edge` on the side the normal points to. */
         int bits = (best_n.x > 0) | (best_n.y > 0) << 1 | (best_n.z > 0) << 2;
         mk_vec3 e0 = box_corner(h, bits & ~(1 << edge)), e1 = box_corner(h, bits | 1 << edge);
-        mk_segment_closest(e0, e1, p0, p1, &s, &t);
+        mk_segment_segment(e0, e1, p0, p1, &s, &t);
         *ca = mk_v3_lerp(e0, e1, s);
         *cb = mk_v3_lerp(p0, p1, t);
     }
 }
 
-static void box_capsule(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+/* Closed form: the segment against the box core, distance when apart and
+ * the least-penetration axis when they meet; a capsule lying on a face then
+ * gives the two clipped ends of its segment. */
+static mk_status box_capsule(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_vec3 h = a->u.half_extents, p0, p1, ca, cb, n;
+    mk_vec3 h = p->a->u.half_extents, axis = mk_v3_scale(p->r.c2, p->b->u.capsule.half_height);
+    mk_vec3 p0 = mk_v3_sub(p->t, axis), p1 = mk_v3_add(p->t, axis), ca, cb, n;
     mk_real d;
-    (void)cache;
-    capsule_ends(b, r, &p0, &p1);
     if (segment_meets_box(p0, p1, h)) {
         segment_box_deep(p0, p1, h, &n, &ca, &cb, &d);
     } else {
         d = segment_box_closest(p0, p1, h, &ca, &cb);
-        if (d - a->radius - b->radius > m->margin) return;
+        if (d - p->a->radius - p->b->radius > m->margin) return MK_OK;
         n = mk_v3_scale(mk_v3_sub(cb, ca), 1 / d);
     }
-    mk_mf_from_closest(m, a, b, r, n, ca, cb, d);
+    mk_mf_from_closest(m, p, cache, n, ca, cb, d);
+    return MK_OK;
 }
 
 /* Any shape A against the half-space B: the support feature of A's core
  * along the inward plane normal holds every deepest point. */
-static void shape_plane(const mk_shape *a, const mk_shape *b, const mk_rel *r, mk_mf *m, mk_manifold_cache *cache)
+static mk_status shape_plane(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
-    mk_vec3 np = mk_mat3_mul_v3(r->R, b->u.plane.normal);
-    mk_real off = b->u.plane.offset + mk_v3_dot(np, r->t);
+    const mk_shape *a = p->a;
+    mk_vec3 np = mk_mat3_mul_v3(p->r, p->b->u.plane.normal);
+    mk_real off = p->b->u.plane.offset + mk_v3_dot(np, p->t);
     mk_feat f;
     int i;
     (void)cache;
@@ -219,18 +177,35 @@ static void shape_plane(const mk_shape *a, const mk_shape *b, const mk_rel *r, m
     for (i = 0; i < f.count; ++i)
         mk_mf_add(m, mk_v3_mad(f.v[i], a->radius, m->normal), a->radius - (mk_v3_dot(np, f.v[i]) - off), f.vid[i],
                   MK_FEATURE(MK_FEATURE_FACE, 0));
+    return MK_OK;
+}
+
+/* Everything else: GJK/EPA with the narrowphase's polish gives the exact
+ * normal and closest points, and the support features along it are clipped
+ * (box-box face contacts, a cylinder standing on a box, ...). */
+static mk_status generic(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
+{
+    mk_hit h;
+    mk_status st = mk_pair_distance(p, cache ? &cache->gjk : NULL, &h);
+    if (st == MK_OK) mk_mf_from_hit(m, p, cache, h);
+    return st;
 }
 
 /* ---- dispatch ------------------------------------------------------------- */
 
+/* The routine for (ta, tb), or NULL when only (tb, ta) has one. Hull
+ * support features are not written yet: hulls are refused for now. */
 static pair_fn pair_table(mk_shape_type ta, mk_shape_type tb)
 {
+    if (ta == MK_SHAPE_HULL || tb == MK_SHAPE_HULL) return NULL;
     if (tb == MK_SHAPE_PLANE) return ta == MK_SHAPE_PLANE ? NULL : shape_plane;
+    if (ta == MK_SHAPE_PLANE) return NULL;
     switch (ta) {
-    case MK_SHAPE_SPHERE: return tb == MK_SHAPE_SPHERE ? sphere_sphere : NULL;
-    case MK_SHAPE_BOX: return tb == MK_SHAPE_SPHERE ? box_sphere : tb == MK_SHAPE_CAPSULE ? box_capsule : NULL;
-    case MK_SHAPE_CAPSULE: return tb == MK_SHAPE_SPHERE ? capsule_sphere : tb == MK_SHAPE_CAPSULE ? capsule_capsule : NULL;
-    default: return NULL;
+    case MK_SHAPE_SPHERE: return tb == MK_SHAPE_SPHERE ? sphere_sphere : tb >= MK_SHAPE_CYLINDER ? generic : NULL;
+    case MK_SHAPE_BOX: return tb == MK_SHAPE_SPHERE ? box_sphere : tb == MK_SHAPE_CAPSULE ? box_capsule : generic;
+    case MK_SHAPE_CAPSULE:
+        return tb == MK_SHAPE_SPHERE ? capsule_sphere : tb == MK_SHAPE_CAPSULE ? capsule_capsule : tb >= MK_SHAPE_CYLINDER ? generic : NULL;
+    default: return tb >= ta ? generic : NULL; /* cylinder and cone: the lower type goes first */
     }
 }
 
@@ -242,7 +217,7 @@ static mk_status check_transform(mk_transform x)
 
 /* Moves the reduced manifold from A's frame to world space; `swap` mirrors
  * it when the pair routine ran with the shapes exchanged. */
-static void finish(const mk_mf *m, mk_transform xa, const mk_rel *r, int swap, mk_manifold *out)
+static void finish(const mk_mf *m, mk_transform xa, const mk_pair *pair, int swap, mk_manifold *out)
 {
     mk_vec3 n = mk_quat_rotate(xa.q, m->normal);
     int i;
@@ -253,7 +228,7 @@ static void finish(const mk_mf *m, mk_transform xa, const mk_rel *r, int swap, m
         mk_contact_point *c = &out->points[i];
         mk_vec3 pb = mk_v3_mad(p->pa, -p->depth, m->normal);
         mk_vec3 wa = mk_transform_point(xa, p->pa), wb = mk_transform_point(xa, pb);
-        mk_vec3 lb = mk_mat3_tmul_v3(r->R, mk_v3_sub(pb, r->t));
+        mk_vec3 lb = mk_mat3_tmul_v3(pair->r, mk_v3_sub(pb, pair->t));
         c->depth = p->depth;
         c->flags = p->depth < 0 ? MK_CONTACT_SPECULATIVE : 0;
         if (swap) {
@@ -278,7 +253,7 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     mk_status st;
     pair_fn fn;
     int swap = 0;
-    mk_rel r;
+    mk_pair p;
     mk_mf m;
     if (!a || !b || !out) return MK_ERR_NULL;
     if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
@@ -301,16 +276,12 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     }
     xa.q = mk_quat_normalize(xa.q);
     xb.q = mk_quat_normalize(xb.q);
-    {
-        mk_transform rel = mk_transform_inv_mul(xa, xb);
-        r.R = mk_mat3_from_quat(rel.q);
-        r.t = rel.p;
-    }
+    p = mk_pair_make(a, xa, b, xb);
     m.count = 0;
     m.margin = margin;
     m.normal = mk_v3(0, 0, 1);
-    fn(a, b, &r, &m, cache);
+    if ((st = fn(&p, &m, cache)) != MK_OK) return st;
     mk_mf_reduce(&m);
-    finish(&m, xa, &r, swap, out);
+    finish(&m, xa, &p, swap, out);
     return MK_OK;
 }

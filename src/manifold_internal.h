@@ -1,7 +1,7 @@
 /* manifold_internal.h: the pieces mk_collide is built from.
  *
  * Everything here works in A's local frame: B's pose relative to A is an
- * mk_rel (x_A = R x_B + t). A manifold is built in three steps: a normal
+ * mk_pair (gjk.h: x_A = r x_B + t). A manifold is built in three steps: a normal
  * (closed form, SAT or GJK), the support features of both cores along it
  * (mk_feat: a point, a segment or a polygon, each vertex and edge named by
  * its mk_feature), and clipping of the incident feature against the
@@ -11,6 +11,7 @@
 #define MINKO_MANIFOLD_INTERNAL_H
 
 #include "minko/manifold.h"
+#include "closest.h"
 
 /* Most vertices of a support feature (hull faces with more are decimated,
  * keeping the support vertex), and most clipped candidates: a polygon with
@@ -23,8 +24,6 @@
  * this is clipped as a face; the depths stay exact because each clipped point
  * is measured on its own. See the report in manifold.c for the choice. */
 #define MK_MF_SIN_TOL MK_REAL(0.01)
-
-typedef struct mk_rel { mk_mat3 R; mk_vec3 t; } mk_rel;
 
 /* A support feature of a core, in some frame. count 1: a point; 2: a
  * segment; >= 3: a convex polygon with outward unit `normal`. eid[i] names
@@ -62,7 +61,7 @@ void mk_mf_add(mk_mf *m, mk_vec3 pa, mk_real depth, mk_feature fa, mk_feature fb
  * smooth caps give their best-aligned face; capsules their segment. */
 void mk_support_feature(const mk_shape *s, mk_vec3 d, mk_feat *out);
 /* Moves a feature from B's frame into A's. */
-void mk_feat_transform(mk_feat *f, const mk_rel *r);
+void mk_feat_transform(mk_feat *f, const mk_pair *p);
 
 /* Clips `inc` against the polygon or segment `ref` and appends the
  * candidates. ref_is_a says whose feature `ref` is; m->normal must already be
@@ -73,9 +72,13 @@ void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, 
 /* The manifold of two cores whose closest points are known: n (unit, A to B)
  * and the core witness points ca on A and cb on B (A's frame), with core
  * distance dist along n (< 0 when the cores overlap). Builds a face clip, a
- * parallel-segment clip or a single point, as the geometry calls for. */
-void mk_mf_from_closest(mk_mf *m, const mk_shape *a, const mk_shape *b, const mk_rel *r,
-                        mk_vec3 n, mk_vec3 ca, mk_vec3 cb, mk_real dist);
+ * parallel-segment clip or a single point, as the geometry calls for, and
+ * records the reference face in `cache` (may be NULL) for the next frame. */
+void mk_mf_from_closest(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk_vec3 n, mk_vec3 ca, mk_vec3 cb,
+                        mk_real dist);
+/* The same from a whole-shape answer (surface witnesses, signed distance);
+ * nothing when the shapes are farther apart than the margin. */
+void mk_mf_from_hit(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk_hit h);
 
 /* Keeps at most MK_MANIFOLD_MAX_POINTS: the deepest, then those spanning the
  * largest area. */
@@ -87,8 +90,5 @@ mk_feature mk_feature_at(const mk_shape *s, mk_vec3 p, mk_vec3 n);
 
 /* Box edge named by two corners that differ in exactly one coordinate. */
 mk_feature mk_box_edge(int corner_i, int corner_j);
-
-/* Closest points of segments p0-p1 and q0-q1: *s, *t in [0, 1]. */
-void mk_segment_closest(mk_vec3 p0, mk_vec3 p1, mk_vec3 q0, mk_vec3 q1, mk_real *s, mk_real *t);
 
 #endif

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "minko/distance.h"
+#include "support/cases.h"
 #include "support/mk_test.h"
 
 #if defined(MK_SINGLE)
@@ -359,6 +360,126 @@ START_TEST(box_box_against_oracle)
 }
 END_TEST
 
+/* ---- issue 2's case families against the long double oracle ------------- */
+
+/* The per-case bound: issue 2's p99 target as a hard limit on every case
+ * (double: 1e-10 relative; nearly touching: 1e-13 of the size, absolute;
+ * normals 1e-6 degrees), and the float build's 1e-4 where the issue sets one
+ * (thin rods and nearly-touching pairs are beyond float: bounds documented). */
+static void check_case(const mk_case *c, const char *what, int k)
+{
+    mk_distance_result r;
+    double err, bound, touch = 1e-5 * c->size;
+    int nearly = !strcmp(c->family, "nearly_touching"), ov;
+    MK_ASSERT_STATUS(mk_distance(&c->a, c->xa, &c->b, c->xb, NULL, &r), MK_OK);
+    err = fabs((double)r.distance - c->distance);
+#if defined(MK_SINGLE)
+    bound = nearly ? 1e-6 * c->size : (!strcmp(c->family, "thin_rods") ? 1e-2 : 1e-4) * fmax(fabs(c->distance), 1e-2 * c->size);
+#else
+    bound = nearly || fabs(c->distance) < touch ? 1e-13 * c->size : 1e-10 * fabs(c->distance);
+    if (c->normal_defined) {
+        mk_lvec3 ref = {c->normal[0], c->normal[1], c->normal[2]};
+        double deg = (double)mk_oracle_angle_deg(ref, r.normal.x, r.normal.y, r.normal.z);
+        ck_assert_msg(deg <= 1e-6, "%s/%s #%d: normal off by %.3g deg", c->family, what, k, deg);
+    }
+#endif
+    ck_assert_msg(err <= bound, "%s/%s #%d: got %.17g want %.17g (err %.3g > %.3g, %s)", c->family, what, k,
+                  (double)r.distance, c->distance, err, bound, mk_method_name(r.method));
+    MK_ASSERT_STATUS(mk_overlap(&c->a, c->xa, &c->b, c->xb, NULL, &ov), MK_OK);
+    if (fabs(c->distance) > touch) ck_assert_msg(ov == (c->distance <= 0), "%s/%s #%d: overlap %d", c->family, what, k, ov);
+}
+
+START_TEST(families_against_oracle)
+{
+    int f, k;
+    for (f = 0; f < MK_FAM_COUNT; ++f) {
+        mk_case_set set = {0};
+        ck_assert_int_eq(mk_cases_add_family(&set, (mk_family)f, 12, 12, 700 + (uint64_t)f), 0);
+        for (k = 0; k < set.count; ++k) check_case(&set.cases[k], set.cases[k].variant, k);
+        mk_case_set_free(&set);
+    }
+}
+END_TEST
+
+/* Hulls of 8, 32 and 128 points on ellipsoids (axis ratios up to 10) against
+ * hulls and boxes, separated and penetrating, against the oracle's
+ * brute-force hull and feature-pair distance. */
+static mk_hull *ellipsoid_hull(mk_rng *rng, int n, mk_vec3 axes)
+{
+    mk_vec3 pts[128];
+    mk_hull *h = NULL;
+    int i;
+    for (i = 0; i < n; ++i) pts[i] = mk_v3_mul(mk_rng_dir(rng), axes);
+    MK_ASSERT_STATUS(mk_hull_create(pts, n, NULL, &h), MK_OK);
+    return h;
+}
+
+START_TEST(hulls_against_oracle)
+{
+    static const int counts[3] = {8, 32, 128};
+    mk_rng rng = {808};
+    int c, i;
+    for (c = 0; c < 3; ++c) {
+        mk_hull *ha = ellipsoid_hull(&rng, counts[c], mk_v3(1, (mk_real)0.4, (mk_real)0.1));
+        mk_hull *hb = ellipsoid_hull(&rng, counts[c], mk_v3((mk_real)0.6, (mk_real)0.6, (mk_real)0.2));
+        mk_shape a, b[2];
+        mk_oracle_shape oa, ob[2];
+        int m;
+        MK_ASSERT_STATUS(mk_shape_hull(ha, 0, &a), MK_OK);
+        MK_ASSERT_STATUS(mk_shape_hull(hb, 0, &b[0]), MK_OK);
+        MK_ASSERT_STATUS(mk_shape_box(mk_v3((mk_real)0.5, (mk_real)0.3, (mk_real)0.05), 0, &b[1]), MK_OK);
+        ck_assert_int_eq(mk_oracle_shape_init(&oa, &a), 0);
+        for (m = 0; m < 2; ++m) ck_assert_int_eq(mk_oracle_shape_init(&ob[m], &b[m]), 0);
+        for (i = 0; i < 24; ++i) {
+            mk_transform xa = mk_transform_make(mk_rng_v3(&rng, -0.2, 0.2), mk_rng_quat(&rng));
+            mk_transform xb = mk_transform_make(mk_rng_v3(&rng, -1.2, 1.2), mk_rng_quat(&rng));
+            mk_oracle_pose pa = mk_oracle_pose_of(xa), pb = mk_oracle_pose_of(xb);
+            mk_oracle_result want;
+            mk_case k;
+            m = i & 1;
+            ck_assert_int_eq(mk_oracle_query(&oa, &pa, &ob[m], &pb, 0, &want), 0);
+            k.family = m ? "hull_box" : "hull_hull";
+            k.a = a;
+            k.b = b[m];
+            k.xa = xa;
+            k.xb = xb;
+            k.distance = (double)want.distance;
+            k.normal[0] = (double)want.normal.x;
+            k.normal[1] = (double)want.normal.y;
+            k.normal[2] = (double)want.normal.z;
+            k.normal_defined = want.normal_defined;
+            k.size = (double)(oa.size > ob[m].size ? oa.size : ob[m].size);
+            check_case(&k, counts[c] == 8 ? "8" : (counts[c] == 32 ? "32" : "128"), i);
+        }
+        mk_oracle_shape_free(&oa);
+        for (m = 0; m < 2; ++m) mk_oracle_shape_free(&ob[m]);
+        mk_hull_destroy(ha);
+        mk_hull_destroy(hb);
+    }
+}
+END_TEST
+
+START_TEST(regressions_against_oracle)
+{
+    mk_case_set set = {0};
+    int k;
+    ck_assert_int_eq(mk_cases_add_regressions(&set), 0);
+    for (k = 0; k < set.count; ++k) {
+        const mk_case *c = &set.cases[k];
+        mk_distance_result r;
+        double err;
+        MK_ASSERT_STATUS(mk_distance(&c->a, c->xa, &c->b, c->xb, NULL, &r), MK_OK);
+        err = fabs((double)r.distance - c->distance);
+#if defined(MK_SINGLE)
+        ck_assert_msg(err <= fmax(1e-4 * fabs(c->distance), 1e-6 * c->size), "%s: err %.3g", c->variant, err);
+#else
+        ck_assert_msg(err <= fmax(1e-10 * fabs(c->distance), 1e-13 * c->size), "%s: err %.3g", c->variant, err);
+#endif
+    }
+    mk_case_set_free(&set);
+}
+END_TEST
+
 /* ---- regression cases from other libraries' bug trackers ---------------- */
 
 /* libccd #25: two 2 m cubes stacked at z = 0 and z = 1.9. Face-aligned boxes
@@ -586,6 +707,9 @@ static Suite *distance_suite(void)
     tcase_add_test(tc, dispatch_reports_method);
     tcase_add_test(tb, box_box_against_oracle);
     tcase_add_test(tb, approx_distance_is_upper_bound);
+    tcase_add_test(tb, families_against_oracle);
+    tcase_add_test(tb, hulls_against_oracle);
+    tcase_add_test(tr, regressions_against_oracle);
     tcase_add_test(tr, regression_stacked_cubes);
     tcase_add_test(tr, regression_size_disparity);
     tcase_add_test(tr, regression_touching_boxes);

@@ -28,7 +28,7 @@ public:
           m_a(a),
           m_b(b)
     {
-        m_cache.kind = m_cache.index_a = m_cache.index_b = 0;
+        m_cache = mk_manifold_cache();  // zeroed: a cold start (minko/manifold.h)
     }
     ~Algorithm() override
     {

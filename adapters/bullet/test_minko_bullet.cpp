@@ -941,9 +941,9 @@ START_TEST(np_conventions_match_bullet)
         {"capsule-capsule", &capsule, &capsule_z, true, true}, {"box-capsule", &box, &capsule, false, true},
         {"capsule-box", &capsule_z, &box, false, true},        {"sphere-plane", &sphere, &plane, true, true},
         {"plane-box", &plane, &box, true, true},               {"capsule-plane", &capsule, &plane, true, true},
-        {"box-box", &box, &box, true, false},             {"hull-plane", &hull, &plane, false, false},
-        {"sphere-hull", &sphere, &hull, false, false},     {"hull-box", &hull, &box, false, false},
-        {"hull-hull", &hull, &hull, false, false},
+        {"box-box", &box, &box, false, false},  // btBoxBoxDetector is dBoxBox: not exact (5 % face preference)
+        {"hull-plane", &hull, &plane, false, false},       {"sphere-hull", &sphere, &hull, false, false},
+        {"hull-box", &hull, &box, false, false},           {"hull-hull", &hull, &hull, false, false},
     };
     mk_rng rng = {777};
     int compared = 0;

@@ -20,9 +20,14 @@
  * are dropped: ODE's contact joint would hold them as touching), g1 = o1,
  * g2 = o2, side1 = side2 = -1, pos midway between the two surfaces; the
  * whole manifold (up to 4 points), deepest point first, then the points that
- * widen the support most. Classes: sphere, box, capsule, cylinder and plane,
- * for the pairs the linked Minko build answers (asked once at run time: a
- * build may leave modules out); mk_ode_supports() tells. mk_ode_collide
+ * widen the support most. Classes: sphere, box, capsule, cylinder, convex and
+ * plane, for the pairs the linked Minko build answers (asked once at run
+ * time: a build may leave modules out); mk_ode_supports() tells. ODE keeps
+ * no getter for a convex geom's data, so convex geoms are Minko's only when
+ * made through mk_ode_create_convex / mk_ode_geom_set_convex, which build
+ * the Minko hull once (a record that no longer matches the geom, e.g. after
+ * a plain dGeomSetConvex or an address reused by a new convex, is detected
+ * and the pair goes to dCollide). mk_ode_collide
  * hands every other pair to dCollide, so a near callback can choose per pair
  * with no global state; mk_ode_install_colliders makes unmodified code use
  * Minko through dSetColliderOverride, which ODE forgets on every
@@ -77,6 +82,34 @@ mk_status mk_ode_init(unsigned int flags);
 /* Frees all adapter state, then dCloseODE(). */
 void mk_ode_close(void);
 
+/* dCreateConvex / dGeomSetConvex that also build the Minko hull (quickhull of
+ * `points`): same arguments, same ODE geom; the arrays must outlive the geom,
+ * as ODE requires. If the hull cannot be built (degenerate points: see
+ * mk_hull_create) the geom still exists and collides through dCollide; the
+ * status is in mk_ode_stats.last_error. mk_ode_geom_destroy drops the
+ * adapter's records of a geom (hull, or a space's broadphase), then
+ * dGeomDestroy()s it. */
+dGeomID mk_ode_create_convex(dSpaceID space, const dReal *planes, unsigned int planecount, const dReal *points,
+                             unsigned int pointcount, const unsigned int *polygons);
+mk_status mk_ode_geom_set_convex(dGeomID g, const dReal *planes, unsigned int planecount, const dReal *points,
+                                 unsigned int pointcount, const unsigned int *polygons);
+void mk_ode_geom_destroy(dGeomID g);
+
+/* ---- continuous collision: when to split a step ---- */
+/* Time of impact of o1 and o2 within the next dt seconds, each keeping its
+ * body's current linear and angular velocity (body-less geoms stand still;
+ * a body may turn at most pi radians in dt). Returns 1 with *toi in [0, dt]
+ * the first time they come within `target` (>= 0) of each other, never
+ * skipping a contact however thin or fast the geoms (Minko's conservative
+ * advancement, mk_toi), and *contact a contact for that moment in ODE's
+ * conventions (depth = the penetration if any, else 0); returns 0 when they
+ * stay farther apart than `target`, when they already penetrate (the
+ * discrete contacts handle that) or touch while moving apart; -1 for a pair
+ * Minko cannot model (counted in mk_ode_stats.errors). A host splits its step
+ * at the earliest *toi over its fast bodies and adds the contacts of pairs
+ * that touch at 0 (demos/ode_scenes.c, wall scene). */
+int mk_ode_time_of_impact(dGeomID o1, dGeomID o2, dReal dt, dReal target, dReal *toi, dContactGeom *contact);
+
 /* ---- switching at run time ---- */
 typedef void mk_ode_space_collide_fn(dSpaceID space, void *data, dNearCallback *callback);
 typedef void mk_ode_space_collide2_fn(dGeomID o1, dGeomID o2, void *data, dNearCallback *callback);
@@ -96,6 +129,7 @@ typedef struct mk_ode_stats {
     long long contacts;        /* contacts written by Minko */
     long long fallbacks;       /* pairs mk_ode_collide handed to dCollide */
     long long unsupported;     /* pairs mk_ode_collider could not handle */
+    long long toi_calls;       /* pairs mk_ode_time_of_impact answered */
     long long errors;          /* bad arguments or failed Minko calls (the call did nothing, or stopped) */
     mk_status last_error;
 } mk_ode_stats;

@@ -8,6 +8,7 @@ mk_ode_stats mk_ode_stats_;
 void mk_ode_close(void)
 {
     mk_ode_space_free_all();
+    mk_ode_collide_free_all();
     dCloseODE();
 }
 

@@ -14,13 +14,19 @@
  * Which class pairs Minko handles is asked of the linked library, once: a
  * build may leave modules out (MK_WITHOUT) and pairs arrive module by module,
  * so the adapter probes mk_collide on a penetrating pose of each class pair
- * and installs overrides only where it answers.
+ * (both orders) and installs overrides only where it answers with contacts.
+ *
+ * Convex geoms: ODE keeps the caller's arrays but offers no getter, so the
+ * wrappers record each convex geom's Minko hull (built once by quickhull from
+ * its points) in a side table keyed by dGeomID.
  */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "minko/manifold.h"
 #include "ode_internal.h"
+#include "ode_map.h"
 
 /* ODE's collision.h flag "any contact will do", and its count mask. */
 #define ODE_CONTACTS_UNIMPORTANT 0x80000000u
@@ -28,7 +34,7 @@
 
 /* ---- geoms as Minko shapes ---- */
 
-static const int classes[] = {dSphereClass, dBoxClass, dCapsuleClass, dCylinderClass, dPlaneClass};
+static const int classes[] = {dSphereClass, dBoxClass, dCapsuleClass, dCylinderClass, dConvexClass, dPlaneClass};
 #define NCLASSES ((int)(sizeof classes / sizeof classes[0]))
 
 static int class_index(int c)
@@ -39,14 +45,15 @@ static int class_index(int c)
     return -1;
 }
 
-/* A representative shape of class index i (unit sizes). */
-static mk_status sample_shape(int i, mk_shape *s)
+/* A representative shape of class index i (unit sizes); `hull` serves the convex class. */
+static mk_status sample_shape(int i, const mk_hull *hull, mk_shape *s)
 {
     switch (classes[i]) {
     case dSphereClass: return mk_shape_sphere(MK_REAL(0.5), s);
     case dBoxClass: return mk_shape_box(mk_v3(MK_REAL(0.5), MK_REAL(0.4), MK_REAL(0.3)), 0, s);
     case dCapsuleClass: return mk_shape_capsule(MK_REAL(0.3), MK_REAL(0.4), s);
     case dCylinderClass: return mk_shape_cylinder(MK_REAL(0.4), MK_REAL(0.3), 0, s);
+    case dConvexClass: return hull ? mk_shape_hull(hull, 0, s) : MK_ERR_UNSUPPORTED;
     default: return mk_shape_plane(mk_v3(0, 0, 1), 0, s);
     }
 }
@@ -57,7 +64,10 @@ static int probed;
 
 static void probe(void)
 {
+    static const mk_vec3 octahedron[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    mk_hull *hull = NULL;
     int i, j;
+    if (mk_hull_create(octahedron, 6, NULL, &hull) != MK_OK) hull = NULL;
     for (i = 0; i < NCLASSES; i++) {
         for (j = 0; j < NCLASSES; j++) {
             mk_shape a, b;
@@ -65,28 +75,174 @@ static void probe(void)
             mk_transform xa = mk_transform_identity(), xb = mk_transform_make(
                                                            mk_v3(MK_REAL(0.1), MK_REAL(0.05), MK_REAL(0.2)),
                                                            mk_quat_from_axis_angle(mk_v3(1, 2, 3), MK_REAL(0.3)));
-            supported[i][j] = sample_shape(i, &a) == MK_OK && sample_shape(j, &b) == MK_OK &&
-                              mk_collide(&a, xa, &b, xb, 0, NULL, &m) == MK_OK;
+            /* every sample pair overlaps at this pose: no contact means no support */
+            supported[i][j] = sample_shape(i, hull, &a) == MK_OK && sample_shape(j, hull, &b) == MK_OK &&
+                              mk_collide(&a, xa, &b, xb, 0, NULL, &m) == MK_OK && m.count > 0;
         }
     }
+    mk_hull_destroy(hull);
     probed = 1;
+}
+
+/* ---- convex side table ---- */
+
+typedef struct convex_rec {
+    dGeomID geom; /* NULL: free record */
+    mk_hull *hull;
+} convex_rec;
+
+static mk_ode_map convex_index; /* dGeomID -> record */
+static convex_rec *convex;
+static int nconvex, capconvex;
+
+static void drop_convex(dGeomID g)
+{
+    long i = mk_ode_map_get(&convex_index, g);
+    if (i < 0) return;
+    mk_hull_destroy(convex[i].hull);
+    convex[i].hull = NULL;
+    convex[i].geom = NULL;
+    mk_ode_map_remove(&convex_index, g);
+}
+
+/* Builds the hull once, from the points ODE collides with (the planes and
+ * polygons describe the same solid; quickhull recovers them). */
+static mk_status record_convex(dGeomID g, const dReal *points, unsigned int pointcount)
+{
+    mk_vec3 *pts;
+    mk_hull *hull = NULL;
+    mk_status s;
+    unsigned int i;
+    int slot;
+    if (!g || !points) return MK_ERR_NULL;
+    if (pointcount > MK_HULL_MAX_POINTS) return MK_ERR_CAPACITY;
+    pts = malloc((pointcount ? pointcount : 1) * sizeof *pts);
+    if (!pts) return MK_ERR_OUT_OF_MEMORY;
+    for (i = 0; i < pointcount; i++)
+        pts[i] = mk_v3((mk_real)points[3 * i], (mk_real)points[3 * i + 1], (mk_real)points[3 * i + 2]);
+    s = mk_hull_create(pts, (int)pointcount, NULL, &hull);
+    free(pts);
+    if (s != MK_OK) return s;
+    drop_convex(g);
+    for (slot = 0; slot < nconvex && convex[slot].geom; slot++) continue;
+    if (slot == nconvex && nconvex == capconvex) {
+        int cap = capconvex ? 2 * capconvex : 16;
+        convex_rec *c = realloc(convex, (size_t)cap * sizeof *c);
+        if (!c) {
+            mk_hull_destroy(hull);
+            return MK_ERR_OUT_OF_MEMORY;
+        }
+        convex = c;
+        capconvex = cap;
+    }
+    if (mk_ode_map_put(&convex_index, g, (uint32_t)slot) != 0) {
+        mk_hull_destroy(hull);
+        return MK_ERR_OUT_OF_MEMORY;
+    }
+    if (slot == nconvex) nconvex++;
+    convex[slot].geom = g;
+    convex[slot].hull = hull;
+    return MK_OK;
+}
+
+dGeomID mk_ode_create_convex(dSpaceID space, const dReal *planes, unsigned int planecount, const dReal *points,
+                             unsigned int pointcount, const unsigned int *polygons)
+{
+    dGeomID g = dCreateConvex(space, planes, planecount, points, pointcount, polygons);
+    mk_status s = record_convex(g, points, pointcount);
+    if (s != MK_OK) { /* the geom exists; Minko just does not know its hull */
+        mk_ode_stats_.errors++;
+        mk_ode_stats_.last_error = s;
+    }
+    return g;
+}
+
+mk_status mk_ode_geom_set_convex(dGeomID g, const dReal *planes, unsigned int planecount, const dReal *points,
+                                 unsigned int pointcount, const unsigned int *polygons)
+{
+    if (!g || !points) return MK_ERR_NULL;
+    if (dGeomGetClass(g) != dConvexClass) return MK_ERR_BAD_SHAPE;
+    dGeomSetConvex(g, planes, planecount, points, pointcount, polygons);
+    drop_convex(g); /* a failed rebuild must not leave the old hull in use */
+    return record_convex(g, points, pointcount);
+}
+
+void mk_ode_geom_destroy(dGeomID g)
+{
+    if (!g) return;
+    drop_convex(g);
+    if (dGeomIsSpace(g)) mk_ode_space_forget((dSpaceID)g);
+    dGeomDestroy(g);
+}
+
+/* The recorded hull of a convex geom, or NULL. A record whose geom address
+ * was reused, or whose data was replaced with dGeomSetConvex behind the
+ * adapter's back, is caught by comparing the hull's world AABB with ODE's
+ * (both are exact over the same extreme points). */
+static const mk_hull *hull_of(dGeomID g)
+{
+    long i = mk_ode_map_get(&convex_index, g);
+    const mk_hull *h;
+    const dReal *p, *R;
+    dReal box[6], size = 0, tol;
+    int v, k;
+    if (i < 0) return NULL;
+    h = convex[i].hull;
+    p = dGeomGetPosition(g);
+    R = dGeomGetRotation(g);
+    dGeomGetAABB(g, box);
+    for (k = 0; k < 3; k++) {
+        dReal lo = HUGE_VAL, hi = -HUGE_VAL;
+        for (v = 0; v < h->vertex_count; v++) {
+            const mk_vec3 *q = &h->vertices[v];
+            dReal w = R[4 * k] * q->x + R[4 * k + 1] * q->y + R[4 * k + 2] * q->z;
+            lo = w < lo ? w : lo;
+            hi = w > hi ? w : hi;
+        }
+        box[2 * k] -= p[k] + lo;
+        box[2 * k + 1] -= p[k] + hi;
+        size = hi - lo > size ? hi - lo : size;
+    }
+    tol = (dReal)(64 * MK_REAL_EPSILON) * (size + dFabs(p[0]) + dFabs(p[1]) + dFabs(p[2]));
+    for (k = 0; k < 6; k++)
+        if (!(dFabs(box[k]) <= tol)) return NULL;
+    return h;
+}
+
+void mk_ode_collide_free_all(void)
+{
+    int i;
+    for (i = 0; i < nconvex; i++)
+        if (convex[i].geom) mk_hull_destroy(convex[i].hull);
+    free(convex);
+    convex = NULL;
+    nconvex = capconvex = 0;
+    mk_ode_map_free(&convex_index);
 }
 
 static int pair_supported(int c1, int c2)
 {
     int i = class_index(c1), j = class_index(c2);
     if (!probed) probe();
-    return i >= 0 && j >= 0 && supported[i][j];
+    return i >= 0 && j >= 0 && supported[i][j] && supported[j][i];
 }
 
 int mk_ode_supports(dGeomID o1, dGeomID o2)
 {
-    return o1 && o2 && pair_supported(dGeomGetClass(o1), dGeomGetClass(o2));
+    if (!o1 || !o2 || !pair_supported(dGeomGetClass(o1), dGeomGetClass(o2))) return 0;
+    if (dGeomGetClass(o1) == dConvexClass && mk_ode_map_get(&convex_index, o1) < 0) return 0;
+    return dGeomGetClass(o2) != dConvexClass || mk_ode_map_get(&convex_index, o2) >= 0;
 }
 
-/* Shape and pose of g relative to `origin`. */
-static mk_status shape_of(dGeomID g, const dReal *origin, mk_shape *shape, mk_transform *xf)
+const dReal *mk_ode_origin_(dGeomID o1, dGeomID o2)
 {
+    static const dReal zero[3] = {0, 0, 0};
+    return dGeomGetClass(o1) != dPlaneClass ? dGeomGetPosition(o1) : dGeomGetClass(o2) != dPlaneClass ? dGeomGetPosition(o2) : zero;
+}
+
+mk_status mk_ode_shape_of_(dGeomID g, const dReal *origin, mk_shape *shape, mk_transform *xf)
+{
+    const mk_hull *h;
     dReal r, len;
     dVector3 l;
     dVector4 p;
@@ -113,6 +269,11 @@ static mk_status shape_of(dGeomID g, const dReal *origin, mk_shape *shape, mk_tr
     case dCylinderClass:
         dGeomCylinderGetParams(g, &r, &len);
         s = mk_shape_cylinder((mk_real)r, (mk_real)(len / 2), 0, shape);
+        break;
+    case dConvexClass:
+        h = hull_of(g);
+        if (!h) return MK_ERR_UNSUPPORTED;
+        s = mk_shape_hull(h, 0, shape);
         break;
     default:
         return MK_ERR_UNSUPPORTED;
@@ -169,16 +330,13 @@ static int choose_points(const mk_manifold *m, int maxc, int *order)
  * decides: fall back to dCollide, or report nothing). */
 static int minko_collide(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip)
 {
-    static const dReal zero[3] = {0, 0, 0};
     int maxc = flags & ODE_NUMC_MASK, order[MK_MANIFOLD_MAX_POINTS], n, i;
-    const dReal *origin = dGeomGetClass(o1) != dPlaneClass   ? dGeomGetPosition(o1)
-                          : dGeomGetClass(o2) != dPlaneClass ? dGeomGetPosition(o2)
-                                                             : zero;
+    const dReal *origin = mk_ode_origin_(o1, o2);
     mk_shape a, b;
     mk_transform xa, xb;
     mk_manifold m;
-    mk_status s = shape_of(o1, origin, &a, &xa);
-    if (s == MK_OK) s = shape_of(o2, origin, &b, &xb);
+    mk_status s = mk_ode_shape_of_(o1, origin, &a, &xa);
+    if (s == MK_OK) s = mk_ode_shape_of_(o2, origin, &b, &xb);
     if (s == MK_OK) s = mk_collide(&a, xa, &b, xb, 0, NULL, &m);
     if (s != MK_OK) {
         mk_ode_stats_.errors++;
@@ -251,7 +409,7 @@ int mk_ode_install_colliders(void)
     /* dSetColliderOverride(i, j) also fills [j][i] (reversed), so one call per unordered pair */
     for (i = 0; i < NCLASSES; i++)
         for (j = i; j < NCLASSES; j++)
-            if (supported[i][j] && supported[j][i]) {
+            if (pair_supported(classes[i], classes[j])) {
                 dSetColliderOverride(classes[i], classes[j], mk_ode_collider);
                 n++;
             }

@@ -13,7 +13,7 @@
  * the build) against ODE's own colliders on the same poses; stride,
  * max-contacts, CONTACTS_UNIMPORTANT and separated pairs; fallback to
  * dCollide; overrides gone after dCloseODE/dInitODE2 and back after
- * mk_ode_init.
+ * mk_ode_init; convex records and their staleness guard; time of impact.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +21,7 @@
 
 #include "minko_ode.h"
 #include "support/mk_test.h"
+#include "support/oracle.h"
 
 #if defined(MK_SINGLE)
 #  define TOL 2e-5 /* relative to the sizes (about 1) in a float build */
@@ -606,8 +607,19 @@ START_TEST(test_box_box_matches_ode)
             const dReal *p = dGeomGetPosition(a);
             for (j = 0; j < nn; j++) nat_depth = nat[j].depth > nat_depth ? nat[j].depth : nat_depth;
             if (fabs(got[0].depth - nat_depth) <= TOL && fabs(dot3(got[0].normal, nat[0].normal) - 1) <= TOL) agree++;
-            /* Minko's depth is the minimum over all axes: never more than ODE's. */
+            /* Minko's depth is the minimum over all axes: never more than ODE's, and exactly the oracle's. */
             ck_assert_msg(got[0].depth <= nat_depth + TOL, "depth %.17g > ODE %.17g", got[0].depth, nat_depth);
+            {
+                mk_shape sa, sb;
+                mk_oracle_result o;
+                dQuaternion q;
+                dGeomGetQuaternion(a, q);
+                mk_shape_box(mk_v3(0.5, 0.7, 0.3), 0, &sa);
+                mk_shape_box(mk_v3(1, 0.9, 0.25), 0, &sb);
+                ck_assert_int_eq(mk_oracle_distance(&sa, mk_transform_make(mk_v3(p[0], p[1], p[2]), mk_quat_make(q[1], q[2], q[3], q[0])),
+                                                    &sb, mk_transform_make(mk_v3(10, 0, 0), mk_quat_identity()), &o), 0);
+                MK_ASSERT_NEAR(got[0].depth, -(double)o.distance, 100 * TOL);
+            }
             dGeomSetPosition(a, p[0] + got[0].normal[0] * (got[0].depth + 1e-6), p[1] + got[0].normal[1] * (got[0].depth + 1e-6),
                              p[2] + got[0].normal[2] * (got[0].depth + 1e-6));
             ck_assert_int_eq(dCollide(a, b, MAXC, after, sizeof(dContactGeom)), 0);
@@ -615,9 +627,11 @@ START_TEST(test_box_box_matches_ode)
         dGeomDestroy(a);
         dGeomDestroy(b);
     }
-    /* dBoxBox prefers face normals by a 5 % fudge factor, so a few poses may
-     * legitimately differ; most must agree exactly. */
-    ck_assert_msg(agree >= 180, "only %d of 200 box-box poses agree with ODE", agree);
+    /* dBoxBox prefers face normals by a 5 % fudge factor, so where an edge
+     * pair is the true minimum axis it reports a deeper face contact; Minko
+     * is checked against the exact depth above, and the share of poses where
+     * the two agree is information, not a pass criterion. */
+    fprintf(stderr, "test_box_box_matches_ode: %d of 200 poses agree exactly with dBoxBox\n", agree);
     mk_ode_close();
 }
 END_TEST
@@ -737,6 +751,128 @@ START_TEST(test_override_reinstalled_after_reinit)
 }
 END_TEST
 
+/* A unit cube as ODE convex data (planes, points, polygons). */
+static const dReal cube_planes[] = {1, 0, 0, 0.5, -1, 0, 0, 0.5, 0, 1, 0, 0.5, 0, -1, 0, 0.5, 0, 0, 1, 0.5, 0, 0, -1, 0.5};
+static const dReal cube_points[] = {0.5, 0.5, 0.5, -0.5, 0.5, 0.5, -0.5, -0.5, 0.5, 0.5, -0.5, 0.5,
+                                    0.5, 0.5, -0.5, -0.5, 0.5, -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5};
+static const unsigned int cube_polys[] = {4, 0, 3, 7, 4, 4, 1, 5, 6, 2, 4, 0, 4, 5, 1, 4, 3, 2, 6, 7, 4, 0, 1, 2, 3, 4, 4, 7, 6, 5};
+static const dReal big_points[] = {1, 1, 1, -1, 1, 1, -1, -1, 1, 1, -1, 1, 1, 1, -1, -1, 1, -1, -1, -1, -1, 1, -1, -1};
+static const dReal big_planes[] = {1, 0, 0, 1, -1, 0, 0, 1, 0, 1, 0, 1, 0, -1, 0, 1, 0, 0, 1, 1, 0, 0, -1, 1};
+
+START_TEST(test_convex_geoms)
+{
+    static const dReal flat[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}; /* coplanar: no hull */
+    dContactGeom c[MAXC], nat[MAXC];
+    dGeomID cv, plane, bad;
+    mk_ode_stats st;
+    int n, nn;
+    dInitODE2(0);
+    mk_ode_stats_reset();
+    cv = mk_ode_create_convex(0, cube_planes, 6, cube_points, 8, cube_polys);
+    plane = dCreatePlane(0, 0, 0, 1, 0);
+    dGeomSetPosition(cv, 4, 4, 0.45);
+    mk_ode_get_stats(&st);
+    ck_assert_int_eq((int)st.errors, 0);
+    /* Degenerate data: the ODE geom is made, Minko refuses the hull, dCollide serves it. */
+    bad = mk_ode_create_convex(0, cube_planes, 1, flat, 4, cube_polys);
+    ck_assert_ptr_nonnull(bad);
+    mk_ode_get_stats(&st);
+    ck_assert_int_eq((int)st.errors, 1);
+    ck_assert_int_eq(st.last_error, MK_ERR_DEGENERATE);
+    ck_assert(!mk_ode_supports(bad, plane));
+    mk_ode_geom_destroy(bad);
+    if (!mk_ode_supports(cv, plane)) { /* hull manifolds not in this build: only the fallback to test */
+        fprintf(stderr, "test_convex_geoms: hull-plane is not in this Minko build yet; fallback checked only\n");
+        n = mk_ode_collide(cv, plane, MAXC, c, sizeof(dContactGeom));
+        nn = dCollide(cv, plane, MAXC, nat, sizeof(dContactGeom));
+        ck_assert_int_eq(n, nn);
+        ck_assert_int_ge(n, 1);
+        mk_ode_geom_destroy(cv);
+        dGeomDestroy(plane);
+        mk_ode_close();
+        return;
+    }
+    n = mk_ode_collide(cv, plane, MAXC, c, sizeof(dContactGeom));
+    ck_assert_int_eq(n, 4); /* a face resting on the plane: the whole face, not one MPR point */
+    assert_conventions(c, n, sizeof(dContactGeom), cv, plane);
+    MK_ASSERT_NEAR(c[0].depth, 0.05, TOL * 10);
+    /* The geom's data replaced behind the adapter's back: the stale hull is
+     * detected (its AABB no longer matches ODE's) and dCollide takes over. */
+    dGeomSetConvex(cv, big_planes, 6, big_points, 8, cube_polys);
+    n = mk_ode_collide(cv, plane, MAXC, c, sizeof(dContactGeom));
+    mk_ode_get_stats(&st);
+    ck_assert_int_eq((int)st.fallbacks, 1);
+    ck_assert_int_ge(n, 1);
+    /* through the wrapper it is rebuilt */
+    ck_assert_int_eq(mk_ode_geom_set_convex(cv, big_planes, 6, big_points, 8, cube_polys), MK_OK);
+    n = mk_ode_collide(cv, plane, MAXC, c, sizeof(dContactGeom));
+    ck_assert_int_eq(n, 4);
+    MK_ASSERT_NEAR(c[0].depth, 0.55, TOL * 10);
+    mk_ode_geom_destroy(cv);
+    dGeomDestroy(plane);
+    mk_ode_close();
+}
+END_TEST
+
+/* A sphere fired at a thin static wall: the time of impact is exact (the
+ * distance to cover over the speed), the contact is ODE's (normal from the
+ * wall into the sphere), and the cases that need no split return 0. */
+START_TEST(test_time_of_impact)
+{
+    dWorldID world;
+    dBodyID body;
+    dGeomID ball, wall;
+    dContactGeom c;
+    dReal t;
+    dMass m;
+    double v = 1000, dt = 0.01, target = 5e-4;
+    dInitODE2(0);
+    world = dWorldCreate();
+    body = dBodyCreate(world);
+    dMassSetSphere(&m, 1000, 0.05);
+    dBodySetMass(body, &m);
+    ball = dCreateSphere(0, 0.05);
+    dGeomSetBody(ball, body);
+    wall = dCreateBox(0, 0.1, 4, 4); /* x in [2.95, 3.05] */
+    dGeomSetPosition(wall, 3, 1, 1);
+    dBodySetPosition(body, -1, 1.2, 0.7);
+    dBodySetLinearVel(body, v, 0, 0);
+    ck_assert_int_eq(mk_ode_time_of_impact(ball, wall, dt, target, &t, &c), 1);
+    MK_ASSERT_NEAR(t, (2.95 - 0.05 - target - (-1)) / v, 1e-9 * dt + TOL * dt);
+    MK_ASSERT_NEAR(c.normal[0], -1, TOL);
+    MK_ASSERT_NEAR(c.depth, 0, TOL);
+    ck_assert_ptr_eq(c.g1, ball);
+    ck_assert_ptr_eq(c.g2, wall);
+    MK_ASSERT_NEAR(c.pos[0], 2.95 - target / 2, 1e-6);
+    /* the same from the wall's side: the normal turns round */
+    ck_assert_int_eq(mk_ode_time_of_impact(wall, ball, dt, target, &t, &c), 1);
+    MK_ASSERT_NEAR(c.normal[0], 1, TOL);
+    /* too slow to get there within dt, or moving away: nothing to split */
+    dBodySetLinearVel(body, 100, 0, 0);
+    ck_assert_int_eq(mk_ode_time_of_impact(ball, wall, dt, target, &t, &c), 0);
+    dBodySetPosition(body, 2.9 - target / 2, 1.2, 0.7); /* within target of the wall */
+    dBodySetLinearVel(body, -10, 0, 0);
+    ck_assert_int_eq(mk_ode_time_of_impact(ball, wall, dt, target, &t, &c), 0);
+    /* closing in while touching: a split at 0 and its contact */
+    dBodySetLinearVel(body, 10, 0, 0);
+    ck_assert_int_eq(mk_ode_time_of_impact(ball, wall, dt, target, &t, &c), 1);
+    ck_assert(t == 0);
+    /* already penetrating: the discrete contacts' business */
+    dBodySetPosition(body, 2.95, 1.2, 0.7);
+    ck_assert_int_eq(mk_ode_time_of_impact(ball, wall, dt, target, &t, &c), 0);
+    /* a spin of more than pi radians per step cannot be swept; bad arguments */
+    dBodySetPosition(body, 0, 1.2, 0.7);
+    dBodySetAngularVel(body, 0, 0, 1000);
+    ck_assert_int_eq(mk_ode_time_of_impact(ball, wall, dt, target, &t, &c), -1);
+    ck_assert_int_eq(mk_ode_time_of_impact(ball, wall, -1, target, &t, &c), -1);
+    ck_assert_int_eq(mk_ode_time_of_impact(ball, wall, dt, target, NULL, &c), -1);
+    dGeomDestroy(ball);
+    dGeomDestroy(wall);
+    dWorldDestroy(world);
+    mk_ode_close();
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("ode_adapter");
@@ -755,6 +891,8 @@ int main(void)
     tcase_add_test(np, test_stride_and_max_contacts);
     tcase_add_test(np, test_fallback_to_dcollide);
     tcase_add_test(np, test_override_reinstalled_after_reinit);
+    tcase_add_test(np, test_convex_geoms);
+    tcase_add_test(np, test_time_of_impact);
     suite_add_tcase(s, bp);
     suite_add_tcase(s, np);
     return mk_test_run(s);

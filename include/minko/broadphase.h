@@ -89,7 +89,10 @@ typedef enum mk_bp_filter_mode {
 /* Return nonzero to keep the pair. Called when a pair starts to overlap (not
  * every frame), when a proxy's filter words change, and again for every pair
  * after a structure rebuild (AUTO switch, recovery from a failed update);
- * from inside mk_bp_update(), so it must not call back into bp. */
+ * brute force, the plain oracle, asks again every update for overlapping
+ * pairs it was refused. Called from inside mk_bp_update(), so it must not
+ * call back into bp; a filter that changes its mind must say so through
+ * mk_bp_set_filter(). */
 typedef int (*mk_bp_pair_filter)(void *ctx, mk_bp_id a, void *user_a, mk_bp_id b, void *user_b);
 
 typedef struct mk_bp_def {

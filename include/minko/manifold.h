@@ -14,8 +14,11 @@
  * margin so it does not flicker between frames. Feature IDs are stable while
  * the same features touch, so a host can key its warm-start cache on them
  * (minko/contact_cache.h). An optional caller-owned mk_manifold_cache per
- * pair (zero-initialised = cold) carries the previous frame's separating
- * axis, so the face/edge choice has hysteresis. Bad input (NULL, NaN/Inf,
+ * pair (zero-initialised = cold) carries the previous frame's reference face
+ * and GJK simplex: when two faces face each other within the tolerance, the
+ * pair keeps clipping against last frame's face, so a rocking stack does not
+ * swap its reference face, normal and feature IDs every few frames; cold, the
+ * reference is the exact minimum axis. Bad input (NULL, NaN/Inf,
  * non-unit rotations, invalid shapes, a negative margin) returns a status
  * and leaves *out untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing
  * allocates; every query runs in A's local frame. Pairs available today:
@@ -40,7 +43,7 @@
 #ifndef MINKO_MANIFOLD_H
 #define MINKO_MANIFOLD_H
 
-#include "minko/shape.h"
+#include "minko/distance.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -88,9 +91,9 @@ typedef struct mk_manifold {
  * for a cold start; keep one per body pair and pass the shapes in the same
  * order every frame. */
 typedef struct mk_manifold_cache {
-    int kind;           /* internal: kind of the last separating axis, 0 = none */
-    int index_a;        /* internal: feature indices of that axis */
-    int index_b;
+    mk_gjk_cache gjk;   /* GJK warm start of pairs without a closed form */
+    int reference;      /* internal: 1 / 2 when the last manifold was clipped against a face of A / B */
+    mk_feature face;    /* internal: that face */
 } mk_manifold_cache;
 
 /* The contact manifold of shapes a (pose xa) and b (pose xb). `margin` >= 0:

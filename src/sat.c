@@ -1,0 +1,323 @@
+/* sat.c: separating-axis test for convex polytopes (see sat.h). */
+#include "sat.h"
+
+/* Edge pairs closer to parallel than this (as the sine of their angle) are
+ * skipped: their cross product has no reliable direction, and the faces on
+ * either side of such a sliver face of A - B bound it to within the angle
+ * times the edge length. */
+#define SAT_PARALLEL (MK_REAL(1e3) * MK_REAL_EPSILON)
+/* Relative size under which a Gauss-map sign test is too close to call. */
+#define SAT_SIGN_TOL (MK_REAL(64.0) * MK_REAL_EPSILON)
+
+/* The best axis found so far of one kind. */
+typedef struct sat_axis {
+    mk_real sep;
+    int a, b;
+    mk_vec3 n;
+} sat_axis;
+
+typedef struct sat_ctx {
+    const mk_hull *a, *b;
+    mk_mat3 R;
+    mk_vec3 t;
+    mk_real stop;
+    sat_axis face_a, face_b, edges;
+    int stopped;
+} sat_ctx;
+
+mk_sat_options mk_sat_defaults(void)
+{
+    mk_sat_options o;
+    o.stop_above = MK_REAL_MAX;
+    o.prefer = MK_SAT_NONE;
+    o.prefer_rel = 0;
+    o.prefer_abs = 0;
+    return o;
+}
+
+static void axis_none(sat_axis *x)
+{
+    x->sep = -MK_REAL_MAX;
+    x->a = x->b = -1;
+    x->n = mk_v3_zero();
+}
+
+/* Keeps x if it beats the best of its kind; notes when it separates enough to stop. */
+static void offer(sat_ctx *c, sat_axis *best, mk_real sep, int ia, int ib, mk_vec3 n)
+{
+    if (!(sep > best->sep)) return;
+    best->sep = sep;
+    best->a = ia;
+    best->b = ib;
+    best->n = n;
+    if (sep > c->stop) c->stopped = 1;
+}
+
+/* Separation along A's face normals: the deepest vertex of B under each face.
+ * Consecutive faces' answers are close, so each support query starts from
+ * the last one. */
+static void faces_of_a(sat_ctx *c)
+{
+    const mk_hull *a = c->a, *b = c->b;
+    int i, hint = -1;
+    for (i = 0; i < a->face_count && !c->stopped; ++i) {
+        mk_plane pl = a->planes[i];
+        int v = hint = mk_hull_support_index(b, mk_mat3_tmul_v3(c->R, mk_v3_neg(pl.normal)), hint);
+        mk_vec3 w = mk_v3_add(mk_mat3_mul_v3(c->R, b->vertices[v]), c->t);
+        offer(c, &c->face_a, mk_v3_dot(pl.normal, w) - pl.offset, i, -1, pl.normal);
+    }
+}
+
+/* Separation along B's face normals (in A's frame), measured in B's frame. */
+static void faces_of_b(sat_ctx *c)
+{
+    const mk_hull *a = c->a, *b = c->b;
+    int j, hint = -1;
+    for (j = 0; j < b->face_count && !c->stopped; ++j) {
+        mk_plane pl = b->planes[j];
+        mk_vec3 m = mk_mat3_mul_v3(c->R, pl.normal);
+        int u = hint = mk_hull_support_index(a, mk_v3_neg(m), hint);
+        offer(c, &c->face_b, mk_v3_dot(m, mk_v3_sub(a->vertices[u], c->t)) - pl.offset, -1, j, mk_v3_neg(m));
+    }
+}
+
+/* Separation of the cores along the unit axis n, from the support points:
+ * valid for any axis, used where the Gauss-map test is too close to call. */
+static mk_real support_separation(const sat_ctx *c, mk_vec3 n)
+{
+    int u = mk_hull_support_index(c->a, n, -1);
+    int v = mk_hull_support_index(c->b, mk_mat3_tmul_v3(c->R, mk_v3_neg(n)), -1);
+    mk_vec3 w = mk_v3_add(mk_mat3_mul_v3(c->R, c->b->vertices[v]), c->t);
+    return mk_v3_dot(n, mk_v3_sub(w, c->a->vertices[u]));
+}
+
+/* Gauss-map test, one sign at a time. Edge eA of A runs between faces with
+ * normals na (on its left, the face of the half-edge) and nb, so its arc on
+ * the unit sphere goes from na to nb and eA is parallel to na x nb; likewise
+ * eB, nc, nd for B, whose arc in A - B is the negated one, from -nc to -nd.
+ * The arcs cross (the edges make a face of A - B) iff -nc and -nd lie on
+ * opposite sides of A's great circle, na and nb on opposite sides of B's, and
+ * the crossing is on the same side of both, not at antipodes:
+ *   (nc.eA)(nd.eA) < 0,  (na.eB)(nb.eB) < 0,  (nc.eA)(nb.eB) < 0.
+ * Returns 1 for a clear face, 0 for a clear non-face, -1 when a sign is within
+ * rounding of zero. */
+static int gauss_sign(mk_real x, mk_real scale) { return x > scale ? 1 : x < -scale ? -1 : 0; }
+
+static int minkowski_face(mk_real c_ea, mk_real d_ea, mk_real a_eb, mk_real b_eb, mk_real sa, mk_real sb)
+{
+    int sc = gauss_sign(c_ea, sa), sd = gauss_sign(d_ea, sa), s1 = gauss_sign(a_eb, sb), s2 = gauss_sign(b_eb, sb);
+    if (sc * sd > 0 || s1 * s2 > 0 || sc * s2 > 0) return 0;
+    return (sc && sd && s1 && s2) ? 1 : -1;
+}
+
+/* Separation along the cross product of edge A (p0 -> p0 + ea, between faces
+ * na and nb) and edge B (q0 -> q0 + eb, A's frame). The axis points into the
+ * arc of A's edge (na + nb side), i.e. out of A. The separation is measured
+ * from p0 to the foot of p0 on B's line: that vector is nearly along the axis,
+ * so the error of the axis direction (about eps / angle between the edges)
+ * costs almost nothing even for edges close to parallel. */
+static int edge_axis(mk_vec3 p0, mk_vec3 ea, mk_vec3 na, mk_vec3 nb, mk_vec3 q0, mk_vec3 eb, mk_vec3 *n, mk_real *sep)
+{
+    mk_vec3 L = mk_v3_cross(ea, eb), foot;
+    mk_real l2 = mk_v3_len2(L), ea2 = mk_v3_len2(ea), eb2 = mk_v3_len2(eb), l;
+    if (!(l2 > SAT_PARALLEL * SAT_PARALLEL * ea2 * eb2)) return 0;
+    l = mk_sqrt_(l2);
+    if (mk_v3_dot(L, mk_v3_add(na, nb)) < 0) l = -l;
+    *n = mk_v3_scale(L, 1 / l);
+    foot = mk_v3_mad(q0, mk_v3_dot(mk_v3_sub(p0, q0), eb) / eb2, eb);
+    *sep = mk_v3_dot(*n, mk_v3_sub(foot, p0));
+    return 1;
+}
+
+/* One edge, ready for the Gauss-map test: a point, the edge vector, the
+ * normals of its two faces (the face of the half-edge first) and the rounding
+ * scale of its sign tests, all in A's frame. */
+typedef struct sat_edge {
+    mk_vec3 p, e, n1, n2;
+    mk_real tol;
+    int index;
+} sat_edge;
+
+/* A's edges are prepared SAT_CHUNK at a time on the stack, so the inner loop
+ * over them reads a compact array instead of chasing indices per pair, and
+ * B's edges (rotated into A's frame) are prepared once per chunk. */
+#define SAT_CHUNK 32
+
+static void prepare_edge(const mk_hull *h, int i, sat_edge *x)
+{
+    const mk_hull_edge *E = &h->edges[i];
+    x->p = h->vertices[E->origin];
+    x->e = mk_v3_sub(h->vertices[h->edges[E->twin].origin], x->p);
+    x->n1 = h->planes[E->face].normal;
+    x->n2 = h->planes[h->edges[E->twin].face].normal;
+    x->tol = SAT_SIGN_TOL * mk_v3_max_abs(x->e);
+    x->index = i;
+}
+
+static void pair(sat_ctx *c, const sat_edge *ea, const sat_edge *eb)
+{
+    mk_vec3 n;
+    mk_real sep;
+    int face = minkowski_face(mk_v3_dot(eb->n1, ea->e), mk_v3_dot(eb->n2, ea->e), mk_v3_dot(ea->n1, eb->e),
+                              mk_v3_dot(ea->n2, eb->e), ea->tol, eb->tol);
+    if (!face || !edge_axis(ea->p, ea->e, ea->n1, ea->n2, eb->p, eb->e, &n, &sep)) return;
+    if (face < 0) sep = support_separation(c, n); /* not surely a face: measure honestly */
+    offer(c, &c->edges, sep, ea->index, eb->index, n);
+}
+
+static void edge_pairs(sat_ctx *c)
+{
+    const mk_hull *a = c->a, *b = c->b;
+    sat_edge chunk[SAT_CHUNK], eb;
+    int i0 = 0, j;
+    while (i0 < a->edge_count && !c->stopped) {
+        int n = 0, k;
+        for (; i0 < a->edge_count && n < SAT_CHUNK; ++i0)
+            if (a->edges[i0].twin > i0) prepare_edge(a, i0, &chunk[n++]); /* each edge once */
+        for (j = 0; j < b->edge_count && !c->stopped; ++j) {
+            if (b->edges[j].twin < j) continue;
+            prepare_edge(b, j, &eb);
+            eb.p = mk_v3_add(mk_mat3_mul_v3(c->R, eb.p), c->t);
+            eb.e = mk_mat3_mul_v3(c->R, eb.e);
+            eb.n1 = mk_mat3_mul_v3(c->R, eb.n1);
+            eb.n2 = mk_mat3_mul_v3(c->R, eb.n2);
+            for (k = 0; k < n && !c->stopped; ++k) {
+                /* The first Gauss-map sign test, inline: it rejects about half the pairs. */
+                mk_real s1 = mk_v3_dot(eb.n1, chunk[k].e), s2 = mk_v3_dot(eb.n2, chunk[k].e), tol = chunk[k].tol;
+                if ((s1 > tol && s2 > tol) || (s1 < -tol && s2 < -tol)) continue;
+                pair(c, &chunk[k], &eb);
+            }
+        }
+    }
+}
+
+static void ctx_init(sat_ctx *c, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt)
+{
+    c->R = *R;
+    c->t = t;
+    c->stop = opt->stop_above;
+    c->stopped = 0;
+    axis_none(&c->face_a);
+    axis_none(&c->face_b);
+    axis_none(&c->edges);
+}
+
+/* The best axis overall, then the hysteresis of mk_sat_options. Ties go to
+ * A's faces, then B's, then edges: face contacts are the stabler. */
+static void finish(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *out)
+{
+    const sat_axis *pick = &c->face_a;
+    mk_sat_kind kind = MK_SAT_FACE_A;
+    if (c->face_b.sep > pick->sep) pick = &c->face_b, kind = MK_SAT_FACE_B;
+    if (c->edges.sep > pick->sep) pick = &c->edges, kind = MK_SAT_EDGES;
+    out->best = pick->sep;
+    out->complete = !c->stopped;
+    if (!c->stopped && opt->prefer != MK_SAT_NONE && opt->prefer != kind) {
+        const sat_axis *p = opt->prefer == MK_SAT_FACE_A ? &c->face_a : opt->prefer == MK_SAT_FACE_B ? &c->face_b : &c->edges;
+        if ((p->a >= 0 || p->b >= 0) && p->sep >= pick->sep - (opt->prefer_rel * mk_fabs_(pick->sep) + opt->prefer_abs))
+            pick = p, kind = opt->prefer;
+    }
+    out->kind = kind;
+    out->a = pick->a;
+    out->b = pick->b;
+    out->separation = pick->sep;
+    out->normal = pick->n;
+}
+
+void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    sat_ctx c;
+    ctx_init(&c, R, t, opt);
+    c.a = a;
+    c.b = b;
+    faces_of_a(&c);
+    faces_of_b(&c);
+    edge_pairs(&c);
+    finish(&c, opt, out);
+}
+
+/* ---- two boxes: the 15 axes in closed form ---------------------------------- */
+
+/* The lower half-edge of each box edge ID, in polytope.h's box view. */
+static const unsigned char box_half_edge[12] = {11, 15, 9, 13, 2, 4, 0, 6, 3, 7, 1, 5};
+
+/* Box edge ID of the edge along `axis` at the corner whose other two
+ * coordinates have the signs of s (minko/manifold.h numbering). */
+static int box_edge(int axis, const mk_real *s)
+{
+    int lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2;
+    return 4 * axis + (s[lo] > 0) + 2 * (s[hi] > 0);
+}
+
+static mk_vec3 v3a(const mk_real *v) { return mk_v3(v[0], v[1], v[2]); }
+
+/* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
+ * frame), so every axis below is a few multiply-adds on scalars. */
+void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    sat_ctx c;
+    mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
+    int i, j, k;
+    const mk_vec3 *cols[3];
+    cols[0] = &R->c0, cols[1] = &R->c1, cols[2] = &R->c2;
+    for (j = 0; j < 3; ++j) {
+        r[0][j] = cols[j]->x, r[1][j] = cols[j]->y, r[2][j] = cols[j]->z;
+        for (i = 0; i < 3; ++i) ar[i][j] = mk_fabs_(r[i][j]);
+    }
+    a[0] = ha.x, a[1] = ha.y, a[2] = ha.z;
+    b[0] = hb.x, b[1] = hb.y, b[2] = hb.z;
+    d[0] = t.x, d[1] = t.y, d[2] = t.z;
+    ctx_init(&c, R, t, opt);
+    /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
+    for (i = 0; i < 3 && !c.stopped; ++i) {
+        mk_real n[3] = {0, 0, 0};
+        n[i] = d[i] >= 0 ? 1 : -1;
+        offer(&c, &c.face_a, mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]), 2 * i + (d[i] >= 0), -1, v3a(n));
+    }
+    /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along +R_j. */
+    for (j = 0; j < 3 && !c.stopped; ++j) {
+        mk_real dj = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2], s = dj >= 0 ? 1 : -1;
+        offer(&c, &c.face_b, mk_fabs_(dj) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]), -1, 2 * j + (dj < 0),
+              mk_v3(s * r[0][j], s * r[1][j], s * r[2][j]));
+    }
+    /* Edge pairs: axis L = e_i x R_j = (0, -R_i2j, R_i1j) in the cyclic
+     * order (i, i1, i2), skipped when the edges are nearly parallel. A's
+     * extent along L is |R_i2j| a_i1 + |R_i1j| a_i2; B's is sum_k |(R^T L)_k|
+     * b_k, from the products rather than the cofactor identity of a rotation,
+     * which the rounded R satisfies only to a few ulps (and the division by a
+     * small |L| would magnify). Only the winner's normal and features are
+     * worked out. */
+    for (i = 0; i < 3 && !c.stopped; ++i) {
+        int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+        for (j = 0; j < 3 && !c.stopped; ++j) {
+            int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            mk_real l2 = r[i1][j] * r[i1][j] + r[i2][j] * r[i2][j], sep;
+            if (!(l2 > SAT_PARALLEL * SAT_PARALLEL)) continue;
+            sep = mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]) -
+                  mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] -
+                  mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
+            sep /= mk_sqrt_(l2);
+            if (sep > c.edges.sep) {
+                c.edges.sep = sep;
+                c.edges.a = i;
+                c.edges.b = j;
+                if (sep > c.stop) c.stopped = 1;
+            }
+        }
+    }
+    if (c.edges.a >= 0) {
+        /* L = e_i x R_j pointing from A to B; A's supporting edge sits at the
+         * corner with the signs of L, B's at the corner with those of -R^T L. */
+        mk_real L[3], Lb[3], l;
+        i = c.edges.a;
+        j = c.edges.b;
+        L[i] = 0, L[(i + 1) % 3] = -r[(i + 2) % 3][j], L[(i + 2) % 3] = r[(i + 1) % 3][j];
+        if (L[0] * d[0] + L[1] * d[1] + L[2] * d[2] < 0) L[0] = -L[0], L[1] = -L[1], L[2] = -L[2];
+        for (k = 0; k < 3; ++k) Lb[k] = -(r[0][k] * L[0] + r[1][k] * L[1] + r[2][k] * L[2]);
+        l = mk_sqrt_(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+        c.edges.n = mk_v3(L[0] / l, L[1] / l, L[2] / l);
+        c.edges.a = box_half_edge[box_edge(i, L)];
+        c.edges.b = box_half_edge[box_edge(j, Lb)];
+    }
+    finish(&c, opt, out);
+}
