@@ -30,7 +30,7 @@ mk_feature mk_box_edge(int ci, int cj)
     return E(4 * axis + ((ci >> lo) & 1) + 2 * ((ci >> hi) & 1));
 }
 
-static void box_face(const mk_shape *s, int axis, int positive, mk_feat *f)
+void mk_box_face(const mk_shape *s, int axis, int positive, mk_feat *f)
 {
     /* Corners of face +axis in counter-clockwise order around +e_axis: in the
      * (b, c) plane with b = axis+1, c = axis+2 (cyclic), (-,-) (+,-) (+,+) (-,+). */
@@ -97,6 +97,63 @@ static void cap_polygon(mk_real r, mk_real z, int cap, mk_vec3 d, mk_feat *f)
     f->normal = mk_v3(0, 0, cap ? 1 : -1);
 }
 
+int mk_hull_edge_id(const mk_hull *h, int e) { return e < h->edges[e].twin ? e : h->edges[e].twin; }
+
+/* The face around hull vertex v best aligned with d. The support face is not
+ * simply the face best aligned over the whole hull (a far face of a sliver
+ * can beat every face at the support vertex); the deepest point is v. */
+static int hull_face_at(const mk_hull *h, int v, mk_vec3 d)
+{
+    int e0 = h->vertex_edge[v], e = e0, best = h->edges[e0].face;
+    mk_real best_dot = -MK_REAL_MAX;
+    do {
+        int face = h->edges[e].face;
+        mk_real dd = mk_v3_dot(h->planes[face].normal, d);
+        if (dd > best_dot) {
+            best_dot = dd;
+            best = face;
+        }
+        e = h->edges[h->edges[e].twin].next;
+    } while (e != e0);
+    return best;
+}
+
+/* Face `face` of a hull as a polygon, walked from vertex `start` (when it is
+ * on the face). A face with more than MK_FEAT_MAX vertices keeps every k-th
+ * one from `start` on, so a support vertex passed as start survives; a
+ * chord is named by the first hull edge it spans. */
+void mk_hull_face(const mk_hull *h, int face, int start, mk_feat *f)
+{
+    int e0 = h->face_edge[face], e = e0, count = 0, step, i = 0, n = 0;
+    do {
+        count++;
+        if (h->edges[e].origin == start) e0 = e;
+        e = h->edges[e].next;
+    } while (e != h->face_edge[face]);
+    step = (count + MK_FEAT_MAX - 1) / MK_FEAT_MAX;
+    e = e0;
+    do {
+        if (i++ % step == 0) {
+            f->v[n] = h->vertices[h->edges[e].origin];
+            f->vid[n] = V(h->edges[e].origin);
+            f->eid[n] = E(mk_hull_edge_id(h, e));
+            n++;
+        }
+        e = h->edges[e].next;
+    } while (e != e0);
+    f->count = n;
+    f->exact = 1;
+    f->id = F(face);
+    f->normal = h->planes[face].normal;
+}
+
+/* The support face of a hull: around the support vertex, best aligned with d. */
+static void hull_face(const mk_hull *h, mk_vec3 d, mk_feat *f)
+{
+    int v = mk_hull_support_index(h, d, -1);
+    mk_hull_face(h, hull_face_at(h, v, d), v, f);
+}
+
 static void segment_feat(mk_vec3 p0, mk_feature f0, mk_vec3 p1, mk_feature f1, mk_feature e, mk_feat *f)
 {
     f->count = 2;
@@ -127,7 +184,7 @@ void mk_support_feature(const mk_shape *s, mk_vec3 d, mk_feat *f)
     case MK_SHAPE_BOX: {
         mk_vec3 a = mk_v3_abs(d);
         int axis = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2); /* ties go to the lower axis */
-        box_face(s, axis, (axis == 0 ? d.x : axis == 1 ? d.y : d.z) >= 0, f);
+        mk_box_face(s, axis, (axis == 0 ? d.x : axis == 1 ? d.y : d.z) >= 0, f);
         break;
     }
     case MK_SHAPE_CAPSULE:
@@ -156,6 +213,9 @@ void mk_support_feature(const mk_shape *s, mk_vec3 d, mk_feat *f)
         }
         break;
     }
+    case MK_SHAPE_HULL:
+        hull_face(s->u.hull, d, f);
+        break;
     case MK_SHAPE_SPHERE:
     default:
         point_feat(mk_v3_zero(), V(0), f);
@@ -217,6 +277,21 @@ mk_feature mk_feature_at(const mk_shape *s, mk_vec3 p, mk_vec3 n)
         if (cap >= 0 && rim) return E(cap);
         return cap >= 0 ? F(cap) : F(SIDE_FACE);
     }
+    case MK_SHAPE_HULL: {
+        /* The support vertex along n, an edge leaving it, or its face best aligned with n. */
+        const mk_hull *h = s->u.hull;
+        int v = mk_hull_support_index(h, n, -1), e0 = h->vertex_edge[v], e = e0;
+        mk_real tol = h->outer_radius * MK_REAL_EPSILON * 256;
+        mk_vec3 pv = h->vertices[v];
+        if (mk_v3_dist(p, pv) <= tol) return V(v);
+        do {
+            mk_vec3 u = mk_v3_sub(h->vertices[h->edges[h->edges[e].twin].origin], pv);
+            mk_real t = mk_v3_dot(mk_v3_sub(p, pv), u) / mk_v3_len2(u);
+            if (t >= 0 && t <= 1 && mk_v3_dist(mk_v3_mad(pv, t, u), p) <= tol) return E(mk_hull_edge_id(h, e));
+            e = h->edges[h->edges[e].twin].next;
+        } while (e != e0);
+        return F(hull_face_at(h, v, n));
+    }
     case MK_SHAPE_SPHERE:
     default:
         return V(0);
@@ -250,7 +325,8 @@ static int side_planes(const mk_feat *ref, mk_vec3 n, side_plane *sp)
     mk_real size = 0;
     for (i = 0; i < ref->count; ++i) c = mk_v3_add(c, ref->v[i]);
     c = mk_v3_scale(c, 1 / (mk_real)ref->count);
-    for (i = 0; i < ref->count; ++i) size = mk_max(size, mk_v3_dist(c, ref->v[i]));
+    for (i = 0; i < ref->count; ++i) size = mk_max(size, mk_v3_len2(mk_v3_sub(c, ref->v[i])));
+    size = mk_sqrt_(size);
     if (ref->count == 2) {
         /* The two end planes of a segment, perpendicular to it within the contact plane. */
         mk_vec3 u = mk_v3_sub(ref->v[1], ref->v[0]);
@@ -284,7 +360,8 @@ static int side_planes(const mk_feat *ref, mk_vec3 n, side_plane *sp)
  * face plane along the ray through p (a polygon), or from the reference
  * segment's line (a segment, which may be tilted against n by the
  * tolerance). */
-static void emit(mk_mf *m, const mk_feat *ref, int ref_is_a, mk_vec3 p, mk_feature fref, mk_feature finc, mk_real ra, mk_real rb)
+static void emit(mk_mf *m, const mk_feat *ref, int ref_is_a, mk_vec3 p, mk_feature fref, mk_feature finc, mk_real ra, mk_real rb,
+                 mk_real inv_cos)
 {
     mk_vec3 n = m->normal, o = ref->v[0];
     mk_real s;
@@ -294,7 +371,7 @@ static void emit(mk_mf *m, const mk_feat *ref, int ref_is_a, mk_vec3 p, mk_featu
         if (uu > 0) o = mk_v3_mad(o, mk_v3_dot(mk_v3_sub(p, o), u) / uu, u);
         s = mk_v3_dot(mk_v3_sub(p, o), n);
     } else {
-        s = mk_v3_dot(mk_v3_sub(p, o), ref->normal) / mk_v3_dot(n, ref->normal);
+        s = mk_v3_dot(mk_v3_sub(p, o), ref->normal) * inv_cos;
     }
     if (ref_is_a) {
         mk_mf_add(m, mk_v3_mad(p, ra - s, n), ra + rb - s, fref, finc);
@@ -407,14 +484,15 @@ void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, 
     side_plane sp[MK_FEAT_MAX];
     clip_vert out[MK_MF_MAX];
     int nsp = side_planes(ref, m->normal, sp), n, i;
+    mk_real inv_cos = ref->count > 2 ? 1 / mk_v3_dot(m->normal, ref->normal) : 0;
     if (inc->count == 1) {
         for (i = 0; i < nsp; ++i)
             if (mk_v3_dot(sp[i].n, inc->v[0]) > sp[i].d) return;
-        emit(m, ref, ref_is_a, inc->v[0], ref->id, inc->vid[0], ra, rb);
+        emit(m, ref, ref_is_a, inc->v[0], ref->id, inc->vid[0], ra, rb, inv_cos);
         return;
     }
     n = inc->count == 2 ? clip_segment(ref, inc, sp, nsp, out) : clip_polygon(ref, inc, sp, nsp, out);
-    for (i = 0; i < n; ++i) emit(m, ref, ref_is_a, out[i].p, out[i].fref, out[i].finc, ra, rb);
+    for (i = 0; i < n; ++i) emit(m, ref, ref_is_a, out[i].p, out[i].fref, out[i].finc, ra, rb, inv_cos);
 }
 
 /* ---- manifold from closest points ------------------------------------------ */

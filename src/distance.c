@@ -189,7 +189,7 @@ mk_status mk_pair_distance(const mk_pair *p, mk_gjk_cache *cache, mk_hit *out)
  * the way back (the identity for capsule paths, which run world-aligned about
  * A's centre). Only what the path uses is computed: a sphere's rotation never
  * matters, a capsule is its axis. */
-static mk_status run(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, path pth,
+MK_ALWAYS_INLINE mk_status run(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, path pth,
                      mk_gjk_cache *cache, mk_mat3 *ra, answer *ans)
 {
     mk_pair p;
@@ -272,9 +272,17 @@ mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_
         spheres(a, xa, b, xb, out);
         return MK_OK;
     }
-    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ra, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
+    if (rt.swap) { /* run as (B, A), flip on the way out */
+        const mk_shape *s = a;
+        mk_transform x = xa;
+        a = b;
+        b = s;
+        xa = xb;
+        xb = x;
+    }
+    st = run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
     if (st != MK_OK) return st;
-    to_world(&ans, ra, rt.swap ? xb.p : xa.p, rt.swap, out);
+    to_world(&ans, ra, xa.p, rt.swap, out);
     return MK_OK;
 }
 

@@ -20,6 +20,7 @@ typedef struct sv_sol {
     mk_real l[4];
     mk_vec3 v;    /* the nearest point */
     mk_real vv;   /* |v|^2 */
+    mk_vec3 d;    /* the next search direction (towards the origin, not unit) */
 } sv_sol;
 
 static void sol_vertex(const mk_cso_vertex *s, int i, sv_sol *out)
@@ -29,6 +30,7 @@ static void sol_vertex(const mk_cso_vertex *s, int i, sv_sol *out)
     out->l[0] = 1;
     out->v = s[i].w;
     out->vv = mk_v3_len2(s[i].w);
+    out->d = mk_v3_neg(s[i].w);
 }
 
 /* Segment (i, j). */
@@ -48,6 +50,9 @@ static void sv_1d(const mk_cso_vertex *s, int i, int j, sv_sol *out)
         out->l[1] = lb;
         out->v = mk_v3_mad(a, lb, t);
         out->vv = mk_v3_len2(out->v);
+        /* Perpendicular to the segment by construction (Catto 2010): its dot
+         * with t is zero to one rounding, which -v's is not. */
+        out->d = mk_v3_cross(t, mk_v3_cross(t, a));
     }
 }
 
@@ -59,11 +64,13 @@ static void sv_2d(const mk_cso_vertex *s, int i, int j, int k, sv_sol *out)
     mk_real nn = mk_v3_len2(n), ca = 0, cb = 0, cc = 0;
     sv_sol e;
     if (nn > 0) {
-        mk_vec3 p0 = mk_v3_scale(n, mk_v3_dot(a, n) / nn); /* the origin projected on the plane */
+        mk_real an = mk_v3_dot(a, n);
+        mk_vec3 p0 = mk_v3_scale(n, an / nn); /* the origin projected on the plane */
         mk_vec3 ap = mk_v3_sub(a, p0), bp = mk_v3_sub(b, p0), cp = mk_v3_sub(c, p0);
         ca = mk_v3_dot(n, mk_v3_cross(bp, cp));
         cb = mk_v3_dot(n, mk_v3_cross(cp, ap));
-        cc = mk_v3_dot(n, mk_v3_cross(ap, bp));
+        /* The three areas sum to nn exactly; the difference rounds like a third product would. */
+        cc = nn - ca - cb;
         if (ca > 0 && cb > 0 && cc > 0) {
             mk_real sum = ca + cb + cc;
             out->n = 3;
@@ -75,6 +82,7 @@ static void sv_2d(const mk_cso_vertex *s, int i, int j, int k, sv_sol *out)
             out->l[2] = cc / sum;
             out->v = p0;
             out->vv = mk_v3_len2(p0);
+            out->d = an > 0 ? mk_v3_neg(n) : n; /* the face normal, towards the origin */
             return;
         }
     }
@@ -121,6 +129,7 @@ static void sv_3d(const mk_cso_vertex *s, sv_sol *out)
         out->l[3] = c3 / mu;
         out->v = mk_v3_zero();
         out->vv = 0;
+        out->d = mk_v3_zero();
         return;
     }
     out->n = 0;
@@ -163,26 +172,6 @@ static void commit(mk_simplex *s, const sv_sol *sol)
     s->n = sol->n;
 }
 
-/* Search direction towards the origin, perpendicular to the simplex by
- * construction (cross products), so its dot with every simplex edge is zero
- * up to one rounding instead of carrying the error of v. Falls back on -v. */
-static mk_vec3 direction(const mk_simplex *s, mk_vec3 v)
-{
-    mk_vec3 d;
-    if (s->n == 2) {
-        mk_vec3 e = mk_v3_sub(s->v[1].w, s->v[0].w);
-        d = mk_v3_cross(e, mk_v3_cross(e, s->v[0].w));
-    } else if (s->n == 3) {
-        d = mk_v3_cross(mk_v3_sub(s->v[1].w, s->v[0].w), mk_v3_sub(s->v[2].w, s->v[0].w));
-        if (mk_v3_dot(d, s->v[0].w) > 0) d = mk_v3_neg(d);
-    } else {
-        d = mk_v3_neg(v);
-    }
-    /* A direction that does not point at the origin side of v is rounding noise. */
-    if (!(mk_v3_dot(d, v) < 0)) d = mk_v3_neg(v);
-    return d;
-}
-
 static int repeated(const mk_simplex *s, const mk_cso_vertex *w)
 {
     int k;
@@ -220,11 +209,15 @@ static mk_vec3 initial_direction(const mk_pair *p, const mk_gjk_cache *c)
     return mk_v3_len2(p->t) > 0 ? p->t : mk_v3(1, 0, 0);
 }
 
-void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real radius, mk_gjk_result *out)
+/* The loop, inlined into one copy per specialised pair of shape types (the
+ * supports then compile to a few selects and two matrix products) and one
+ * generic copy that switches on the types. */
+MK_ALWAYS_INLINE void gjk_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, const mk_gjk_cache *cache, int boolean,
+                               mk_real radius, mk_gjk_result *out)
 {
     mk_simplex *s = &out->s;
     sv_sol sol;
-    mk_real scale2 = 0, lower = -(mk_real)HUGE_VAL;
+    mk_real scale2 = 0, scale, lower = -(mk_real)HUGE_VAL;
     int iter, k, ha = -1, hb = -1, overlap = 0;
     mk_solve_state state = MK_SOLVE_MAX_ITERATIONS;
 
@@ -234,18 +227,19 @@ void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real ra
         hb = cache->ib[0];
     } else {
         s->n = 1;
-        s->v[0] = mk_pair_support(p, initial_direction(p, cache), -1, -1);
+        s->v[0] = mk_pair_support_typed(p, ta, tb, initial_direction(p, cache), -1, -1);
         ha = s->v[0].ia;
         hb = s->v[0].ib;
     }
     for (k = 0; k < s->n; ++k) scale2 = mk_max(scale2, mk_v3_len2(s->v[k].w));
+    scale = mk_sqrt_(scale2);
     solve(s, &sol);
     commit(s, &sol);
 
     for (iter = 0; iter < MK_GJK_MAX_ITERATIONS; ++iter) {
         mk_cso_vertex w;
         mk_vec3 d;
-        mk_real dn, lo, u, tol_abs = MK_GJK_ABS_TOL * mk_sqrt_(scale2);
+        mk_real dn, lo, u, w2, tol_abs = MK_GJK_ABS_TOL * scale;
         if (s->n == 4 || sol.vv <= tol_abs * tol_abs) { /* origin inside, or on the simplex to rounding */
             overlap = 1;
             state = MK_SOLVE_CONVERGED;
@@ -257,17 +251,22 @@ void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real ra
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        d = direction(s, sol.v);
+        /* A direction that does not point at the origin side of v is rounding noise. */
+        d = mk_v3_dot(sol.d, sol.v) < 0 ? sol.d : mk_v3_neg(sol.v);
         dn = mk_v3_len(d);
         if (!(dn > 0)) {
             state = MK_SOLVE_DEGENERATE;
             break;
         }
         d = mk_v3_scale(d, 1 / dn);
-        w = mk_pair_support(p, d, ha, hb);
+        w = mk_pair_support_typed(p, ta, tb, d, ha, hb);
         ha = w.ia;
         hb = w.ib;
-        scale2 = mk_max(scale2, mk_v3_len2(w.w));
+        w2 = mk_v3_len2(w.w);
+        if (w2 > scale2) {
+            scale2 = w2;
+            scale = mk_sqrt_(w2);
+        }
         lo = -mk_v3_dot(d, w.w);
         if (lo > lower) {
             lower = lo;
@@ -277,7 +276,7 @@ void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real ra
             state = MK_SOLVE_CONVERGED;
             break;
         }
-        if (repeated(s, &w) || u - lower <= MK_GJK_REL_TOL * u + MK_GJK_ABS_TOL * mk_sqrt_(scale2)) {
+        if (repeated(s, &w) || u - lower <= MK_GJK_REL_TOL * u + MK_GJK_ABS_TOL * scale) {
             state = MK_SOLVE_CONVERGED;
             break;
         }
@@ -302,10 +301,33 @@ void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real ra
     out->v = sol.v;
     out->upper = overlap ? 0 : mk_sqrt_(sol.vv);
     out->lower = lower;
-    out->scale = mk_sqrt_(scale2);
+    out->scale = scale;
     out->overlap = overlap;
     out->iterations = iter + 1;
     out->state = state;
+}
+
+static void gjk_box_box(const mk_pair *p, const mk_gjk_cache *c, int boolean, mk_real r, mk_gjk_result *out)
+{
+    gjk_loop(p, MK_SHAPE_BOX, MK_SHAPE_BOX, c, boolean, r, out);
+}
+
+static void gjk_hull_hull(const mk_pair *p, const mk_gjk_cache *c, int boolean, mk_real r, mk_gjk_result *out)
+{
+    gjk_loop(p, MK_SHAPE_HULL, MK_SHAPE_HULL, c, boolean, r, out);
+}
+
+static void gjk_any(const mk_pair *p, const mk_gjk_cache *c, int boolean, mk_real r, mk_gjk_result *out)
+{
+    gjk_loop(p, p->a->type, p->b->type, c, boolean, r, out);
+}
+
+void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real radius, mk_gjk_result *out)
+{
+    mk_shape_type ta = p->a->type, tb = p->b->type;
+    if (ta == MK_SHAPE_BOX && tb == MK_SHAPE_BOX) gjk_box_box(p, cache, boolean, radius, out);
+    else if (ta == MK_SHAPE_HULL && tb == MK_SHAPE_HULL) gjk_hull_hull(p, cache, boolean, radius, out);
+    else gjk_any(p, cache, boolean, radius, out);
 }
 
 void mk_gjk_cache_store(const mk_simplex *s, mk_vec3 normal, mk_gjk_cache *cache)

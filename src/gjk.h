@@ -66,13 +66,22 @@ typedef struct mk_gjk_result {
     mk_solve_state state;
 } mk_gjk_result;
 
+/* 2 / |q|^2 for a quaternion accepted by the pose check (e = |q|^2 - 1 within
+ * MK_QUAT_TOLERANCE): 2 (1 - e + e^2) is off by 2 e^3, below the rounding of
+ * either precision (2e-18 in double, 2e-12 in float), and it keeps a division
+ * off the head of every query's dependency chain. */
+static inline mk_real mk_two_over_len2(mk_quat q)
+{
+    mk_real e = mk_quat_len2(q) - 1;
+    return 2 * (1 - e * (1 - e));
+}
+
 /* Rotation matrix of a quaternion that is unit only to within
  * MK_QUAT_TOLERANCE: the usual formula with 2/|q|^2 in place of 2 is an exact
- * rotation for any non-zero q, so no square root, no renormalised copy, and
- * the one division overlaps the products instead of preceding them. */
+ * rotation for any such q, so no square root and no renormalised copy. */
 static inline mk_mat3 mk_rotation_of(mk_quat q)
 {
-    mk_real s = 2 / mk_quat_len2(q);
+    mk_real s = mk_two_over_len2(q);
     mk_real xs = q.x * s, ys = q.y * s, zs = q.z * s;
     mk_real xx = q.x * xs, yy = q.y * ys, zz = q.z * zs, xy = q.x * ys, xz = q.x * zs, yz = q.y * zs;
     mk_real wx = q.w * xs, wy = q.w * ys, wz = q.w * zs;
@@ -84,7 +93,7 @@ static inline mk_mat3 mk_rotation_of(mk_quat q)
  * third column of mk_rotation_of(q), without the other two. */
 static inline mk_vec3 mk_axis_of(mk_quat q)
 {
-    mk_real s = 2 / mk_quat_len2(q);
+    mk_real s = mk_two_over_len2(q);
     return mk_v3((q.x * q.z + q.w * q.y) * s, (q.y * q.z - q.w * q.x) * s, 1 - (q.x * q.x + q.y * q.y) * s);
 }
 
@@ -104,18 +113,25 @@ static inline mk_pair mk_pair_make(const mk_shape *a, mk_transform xa, const mk_
     return mk_pair_in(a, mk_rotation_of(xa.q), xa.p, b, xb);
 }
 
-/* Support of A - B along d (A's frame). *ha, *hb: hints in, vertex indices out. */
-MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support(const mk_pair *p, mk_vec3 d, int ha, int hb)
+/* Support of A - B along d (A's frame) for shapes of types ta, tb; ha, hb:
+ * hints (previous vertex indices), returned as the new indices. */
+MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support_typed(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, mk_vec3 d,
+                                                     int ha, int hb)
 {
     mk_cso_vertex v;
     mk_vec3 bl;
     v.ia = ha;
     v.ib = hb;
-    v.a = mk_core_support_inl(p->a, d, &v.ia);
-    bl = mk_core_support_inl(p->b, mk_mat3_tmul_v3(p->r, mk_v3_neg(d)), &v.ib);
+    v.a = mk_core_support_typed(p->a, ta, d, &v.ia);
+    bl = mk_core_support_typed(p->b, tb, mk_mat3_tmul_v3(p->r, mk_v3_neg(d)), &v.ib);
     v.b = mk_v3_add(mk_mat3_mul_v3(p->r, bl), p->t);
     v.w = mk_v3_sub(v.a, v.b);
     return v;
+}
+
+MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support(const mk_pair *p, mk_vec3 d, int ha, int hb)
+{
+    return mk_pair_support_typed(p, p->a->type, p->b->type, d, ha, hb);
 }
 
 /* sep(n) = min_B n.b - max_A n.a for a unit n from A towards B: a lower bound

@@ -969,9 +969,30 @@ static int hull_geometry(mk_hull *h, const dv3 *pc, dv3 centre, const int *vout)
     return 1;
 }
 
-/* Compacts the live mesh into one block: faces in index order with each face's
- * half-edges contiguous in loop order, vertices in input order. */
-static mk_status emit(const qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *al, int *vmap, int *emap,
+/* The live faces in breadth-first order over their adjacency, from the first
+ * one: faces with nearby indices are then nearby on the hull, so a loop over
+ * the faces that warm-starts each support query from the last answer (SAT)
+ * climbs a step or two instead of across the hull. */
+static void breadth_first_faces(qh *q, int *order, int nf)
+{
+    int id = ++q->stamp, head = 0, n = 0, f;
+    for (f = 0; f < q->f_top && q->f[f].mark == QH_DELETED; ++f) {}
+    order[n++] = f;
+    q->cl[f] = id;
+    while (head < n && n < nf) {
+        int x = q->f[order[head]].edge, x0 = x;
+        do {
+            int g = q->e[q->e[x].twin].face;
+            if (q->cl[g] != id) q->cl[g] = id, order[n++] = g;
+            x = q->e[x].next;
+        } while (x != x0);
+        ++head;
+    }
+}
+
+/* Compacts the live mesh into one block: faces in breadth-first order, each
+ * face's half-edges contiguous in loop order, vertices in input order. */
+static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *al, int *vmap, int *emap,
                       int *vout, mk_hull **out)
 {
     int nv = 0, ne = 0, nf = 0, i, f, e;
@@ -980,6 +1001,7 @@ static mk_status emit(const qh *q, const mk_vec3 *in, dv3 centre, const mk_alloc
     mk_hull *h;
     mk_hull_edge *edges;
     uint16_t *fe, *ve;
+    int *order = q->members;
     for (i = 0; i < q->n; ++i) vmap[i] = -1;
     for (f = 0; f < q->f_top; ++f) {
         if (q->f[f].mark == QH_DELETED) continue;
@@ -1022,21 +1044,19 @@ static mk_status emit(const qh *q, const mk_vec3 *in, dv3 centre, const mk_alloc
     h->allocator = *al;
     h->bytes = bytes;
     for (i = 0; i < nv; ++i) ((mk_vec3 *)h->vertices)[i] = in[vout[i]];
+    breadth_first_faces(q, order, h->face_count);
     ne = 0;
-    nf = 0;
-    for (f = 0; f < q->f_top; ++f) { /* number the half-edges face by face */
-        if (q->f[f].mark == QH_DELETED) continue;
+    for (nf = 0; nf < h->face_count; ++nf) { /* number the half-edges face by face */
+        f = order[nf];
         fe[nf] = (uint16_t)ne;
         e = q->f[f].edge;
         do {
             emap[e] = ne++;
             e = q->e[e].next;
         } while (e != q->f[f].edge);
-        ++nf;
     }
-    nf = 0;
-    for (f = 0; f < q->f_top; ++f) {
-        if (q->f[f].mark == QH_DELETED) continue;
+    for (nf = 0; nf < h->face_count; ++nf) {
+        f = order[nf];
         if (!(dv_dot(q->f[f].n, q->f[f].n) > 0)) break; /* a face of no area: refused below */
         ((mk_plane *)h->planes)[nf].normal = mk_v3((mk_real)q->f[f].n.x, (mk_real)q->f[f].n.y, (mk_real)q->f[f].n.z);
         e = q->f[f].edge;
@@ -1049,7 +1069,6 @@ static mk_status emit(const qh *q, const mk_vec3 *in, dv3 centre, const mk_alloc
             ve[o->origin] = (uint16_t)emap[e];
             e = q->e[e].next;
         } while (e != q->f[f].edge);
-        ++nf;
     }
     if (nf != h->face_count || !hull_geometry(h, q->p, centre, vout)) {
         al->free(al->ctx, blk, bytes);

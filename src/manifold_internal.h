@@ -88,6 +88,14 @@ void mk_mf_reduce(mk_mf *m);
  * with n the outward direction there. */
 mk_feature mk_feature_at(const mk_shape *s, mk_vec3 p, mk_vec3 n);
 
+/* Face `face` of a hull as a polygon (see clip.c), and the feature index of
+ * a hull half-edge (the lower of the pair). */
+void mk_hull_face(const mk_hull *h, int face, int start, mk_feat *f);
+int mk_hull_edge_id(const mk_hull *h, int half_edge);
+
+/* Face 2 * axis + positive of a box core as a polygon. */
+void mk_box_face(const mk_shape *s, int axis, int positive, mk_feat *f);
+
 /* Box edge named by two corners that differ in exactly one coordinate. */
 mk_feature mk_box_edge(int corner_i, int corner_j);
 

@@ -68,19 +68,6 @@ static void faces_of_a(sat_ctx *c)
     }
 }
 
-/* Separation along B's face normals (in A's frame), measured in B's frame. */
-static void faces_of_b(sat_ctx *c)
-{
-    const mk_hull *a = c->a, *b = c->b;
-    int j, hint = -1;
-    for (j = 0; j < b->face_count && !c->stopped; ++j) {
-        mk_plane pl = b->planes[j];
-        mk_vec3 m = mk_mat3_mul_v3(c->R, pl.normal);
-        int u = hint = mk_hull_support_index(a, mk_v3_neg(m), hint);
-        offer(c, &c->face_b, mk_v3_dot(m, mk_v3_sub(a->vertices[u], c->t)) - pl.offset, -1, j, mk_v3_neg(m));
-    }
-}
-
 /* Separation of the cores along the unit axis n, from the support points:
  * valid for any axis, used where the Gauss-map test is too close to call. */
 static mk_real support_separation(const sat_ctx *c, mk_vec3 n)
@@ -138,11 +125,6 @@ typedef struct sat_edge {
     int index;
 } sat_edge;
 
-/* A's edges are prepared SAT_CHUNK at a time on the stack, so the inner loop
- * over them reads a compact array instead of chasing indices per pair, and
- * B's edges (rotated into A's frame) are prepared once per chunk. */
-#define SAT_CHUNK 32
-
 static void prepare_edge(const mk_hull *h, int i, sat_edge *x)
 {
     const mk_hull_edge *E = &h->edges[i];
@@ -151,43 +133,113 @@ static void prepare_edge(const mk_hull *h, int i, sat_edge *x)
     x->n1 = h->planes[E->face].normal;
     x->n2 = h->planes[h->edges[E->twin].face].normal;
     x->tol = SAT_SIGN_TOL * mk_v3_max_abs(x->e);
-    x->index = i;
+    x->index = E->twin < i ? E->twin : i; /* an edge is named by its lower half-edge */
 }
 
-static void pair(sat_ctx *c, const sat_edge *ea, const sat_edge *eb)
+/* Offers the pair's axis if the Gauss-map test lets it through; returns the
+ * test's verdict (1 face, 0 not, -1 too close to call). */
+static int pair(sat_ctx *c, const sat_edge *ea, const sat_edge *eb)
 {
     mk_vec3 n;
     mk_real sep;
     int face = minkowski_face(mk_v3_dot(eb->n1, ea->e), mk_v3_dot(eb->n2, ea->e), mk_v3_dot(ea->n1, eb->e),
                               mk_v3_dot(ea->n2, eb->e), ea->tol, eb->tol);
-    if (!face || !edge_axis(ea->p, ea->e, ea->n1, ea->n2, eb->p, eb->e, &n, &sep)) return;
-    if (face < 0) sep = support_separation(c, n); /* not surely a face: measure honestly */
-    offer(c, &c->edges, sep, ea->index, eb->index, n);
+    if (face && edge_axis(ea->p, ea->e, ea->n1, ea->n2, eb->p, eb->e, &n, &sep)) {
+        if (face < 0) sep = support_separation(c, n); /* not surely a face: measure honestly */
+        offer(c, &c->edges, sep, ea->index, eb->index, n);
+    }
+    return face;
 }
 
-static void edge_pairs(sat_ctx *c)
+/* Every edge of A against B's edge eb: the fallback of walk(). */
+static void scan(sat_ctx *c, const sat_edge *eb)
+{
+    const mk_hull *a = c->a;
+    int i;
+    for (i = 0; i < a->edge_count && !c->stopped; ++i)
+        if (a->edges[i].twin > i) {
+            sat_edge ea;
+            prepare_edge(a, i, &ea);
+            pair(c, &ea, eb);
+        }
+}
+
+/* The edges of A whose Gauss-map arcs B's edge eb crosses, found by walking
+ * A's Gauss map (Gregorius; cf. "Gauss map traversal") instead of testing all
+ * of them. A's vertex v owns the region of directions along which it is the
+ * support; the region is bounded by the arcs of v's edges. eb's arc runs from
+ * -n1 to -n2 (its faces' normals, negated for A - B) and starts in the region
+ * of v, the support of A along -n1. A great arc shorter than a half circle
+ * leaves a convex region once, so at each vertex one edge at most (other than
+ * the one we came in by) is crossed: that pair is a face of A - B, and the
+ * walk goes on from the edge's other end, until the arc ends inside a region.
+ * This costs a few vertices of A per edge of B instead of all of A's edges.
+ * Returns 0 when a sign test is too close to call (the arc passes through a
+ * face normal of A, as between parallel faces) or the walk goes astray; the
+ * caller then scans every edge of A for this one. */
+static int walk(sat_ctx *c, const sat_edge *eb, int v)
+{
+    const mk_hull *a = c->a;
+    int from = -1, steps = 0;
+    while (!c->stopped) {
+        int e0 = a->vertex_edge[v], e = e0, next = -1, through = -1;
+        mk_vec3 pv = a->vertices[v];
+        do {
+            const mk_hull_edge *E = &a->edges[e];
+            int t = E->twin, und = e < t ? e : t;
+            if (und != from) {
+                /* The first sign test inline, before anything else is loaded:
+                 * it rejects most of the edges around a vertex. */
+                mk_vec3 ea = mk_v3_sub(a->vertices[a->edges[t].origin], pv);
+                mk_real s1 = mk_v3_dot(eb->n1, ea), s2 = mk_v3_dot(eb->n2, ea), tol = SAT_SIGN_TOL * mk_v3_max_abs(ea);
+                if (!((s1 > tol && s2 > tol) || (s1 < -tol && s2 < -tol))) {
+                    sat_edge x;
+                    int face;
+                    x.p = pv;
+                    x.e = ea;
+                    x.n1 = a->planes[E->face].normal;
+                    x.n2 = a->planes[a->edges[t].face].normal;
+                    x.tol = tol;
+                    x.index = und;
+                    face = pair(c, &x, eb);
+                    if (face < 0 || (face > 0 && next >= 0)) return 0;
+                    if (face > 0) next = a->edges[t].origin, through = und;
+                }
+            }
+            e = a->edges[t].next;
+        } while (e != e0);
+        if (next < 0) return 1;
+        if (++steps > a->vertex_count) return 0;
+        v = next;
+        from = through;
+    }
+    return 1;
+}
+
+/* B's faces, then B's edges face by face: the support of A along -n_f that
+ * measures the separation along B's face f is also where the Gauss-map walk
+ * of each of f's edges starts (their arcs begin at -n_f). */
+static void faces_and_edges_of_b(sat_ctx *c)
 {
     const mk_hull *a = c->a, *b = c->b;
-    sat_edge chunk[SAT_CHUNK], eb;
-    int i0 = 0, j;
-    while (i0 < a->edge_count && !c->stopped) {
-        int n = 0, k;
-        for (; i0 < a->edge_count && n < SAT_CHUNK; ++i0)
-            if (a->edges[i0].twin > i0) prepare_edge(a, i0, &chunk[n++]); /* each edge once */
-        for (j = 0; j < b->edge_count && !c->stopped; ++j) {
-            if (b->edges[j].twin < j) continue;
-            prepare_edge(b, j, &eb);
-            eb.p = mk_v3_add(mk_mat3_mul_v3(c->R, eb.p), c->t);
-            eb.e = mk_mat3_mul_v3(c->R, eb.e);
-            eb.n1 = mk_mat3_mul_v3(c->R, eb.n1);
-            eb.n2 = mk_mat3_mul_v3(c->R, eb.n2);
-            for (k = 0; k < n && !c->stopped; ++k) {
-                /* The first Gauss-map sign test, inline: it rejects about half the pairs. */
-                mk_real s1 = mk_v3_dot(eb.n1, chunk[k].e), s2 = mk_v3_dot(eb.n2, chunk[k].e), tol = chunk[k].tol;
-                if ((s1 > tol && s2 > tol) || (s1 < -tol && s2 < -tol)) continue;
-                pair(c, &chunk[k], &eb);
+    int f, hint = -1;
+    for (f = 0; f < b->face_count && !c->stopped; ++f) {
+        mk_plane pl = b->planes[f];
+        mk_vec3 m = mk_mat3_mul_v3(c->R, pl.normal);
+        int u = hint = mk_hull_support_index(a, mk_v3_neg(m), hint), j0 = b->face_edge[f], j = j0;
+        offer(c, &c->face_b, mk_v3_dot(m, mk_v3_sub(a->vertices[u], c->t)) - pl.offset, -1, f, mk_v3_neg(m));
+        do {
+            if (b->edges[j].twin > j && !c->stopped) { /* each edge once, from the face of its lower half-edge */
+                sat_edge eb;
+                prepare_edge(b, j, &eb);
+                eb.p = mk_v3_add(mk_mat3_mul_v3(c->R, eb.p), c->t);
+                eb.e = mk_mat3_mul_v3(c->R, eb.e);
+                eb.n1 = m;
+                eb.n2 = mk_mat3_mul_v3(c->R, eb.n2);
+                if (!walk(c, &eb, u)) scan(c, &eb);
             }
-        }
+            j = b->edges[j].next;
+        } while (j != j0);
     }
 }
 
@@ -231,8 +283,7 @@ void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, con
     c.a = a;
     c.b = b;
     faces_of_a(&c);
-    faces_of_b(&c);
-    edge_pairs(&c);
+    faces_and_edges_of_b(&c);
     finish(&c, opt, out);
 }
 

@@ -17,10 +17,17 @@
  * axis separates by more than it (0 for a yes/no overlap test, a speculative
  * margin for contact generation, MK_REAL_MAX to test every axis); prefer is
  * the face/edge hysteresis hook, see mk_sat_options. No allocation, no
- * global state. Complexity: O(F_A S_B + F_B S_A + E_A E_B), S the cost of a
- * support query (a scan below MK_HULL_SCAN_MAX vertices, a hill climb above)
- * and a few dot products per edge pair: the Gauss-map test rejects the pairs
- * that are not faces of A - B before any support work (Gregorius, GDC 2013).
+ * global state. Complexity: O(F_A S_B + F_B S_A) for the faces, S the cost
+ * of a support query (a scan below MK_HULL_SCAN_MAX vertices, a hill climb
+ * above), plus, for the edges, a walk over A's Gauss map along each edge arc
+ * of B that visits only the few vertices of A whose regions the arc crosses
+ * and tests their edges with the Gauss-map (Minkowski face) test of
+ * Gregorius (GDC 2013); an arc whose signs are too close to call (parallel
+ * faces) is instead tested against all of A's edges, O(E_A). Measured
+ * (demos/bench_sat, valgrind instruction counts): box-box 1.4k instructions
+ * by mk_sat_box_box, 15k by mk_sat on box views; hulls of 8/32/128 points
+ * 28k/162k/730k. Minko's GJK + EPA answers hull pairs faster (see the
+ * benchmark); SAT's value there is its feature output and hysteresis.
  */
 #ifndef MINKO_SAT_H
 #define MINKO_SAT_H

@@ -32,11 +32,12 @@ mk_vec3 mk_core_support(const mk_shape *s, mk_vec3 dir, int *feature);
 
 static inline mk_real mk_sgn_extent_(mk_real d, mk_real h) { return d >= 0 ? h : -h; }
 
-/* The body of mk_core_support, inline so the GJK/EPA loops pay no call and
- * the type switch is a well-predicted branch. *feature must be valid (in/out). */
-MK_ALWAYS_INLINE mk_vec3 mk_core_support_inl(const mk_shape *s, mk_vec3 d, int *feature)
+/* The body of mk_core_support for a shape of type t (normally s->type), so
+ * loops specialised on a constant t lose the switch and keep their vectors in
+ * registers. *feature must be valid (in/out). */
+MK_ALWAYS_INLINE mk_vec3 mk_core_support_typed(const mk_shape *s, mk_shape_type t, mk_vec3 d, int *feature)
 {
-    switch (s->type) {
+    switch (t) {
     case MK_SHAPE_SPHERE:
         *feature = 0;
         return mk_v3_zero();
@@ -72,6 +73,12 @@ MK_ALWAYS_INLINE mk_vec3 mk_core_support_inl(const mk_shape *s, mk_vec3 d, int *
         *feature = -1;
         return mk_v3(MK_REAL_MAX, MK_REAL_MAX, MK_REAL_MAX);
     }
+}
+
+/* mk_core_support inline: the GJK/EPA loops pay no call. */
+MK_ALWAYS_INLINE mk_vec3 mk_core_support_inl(const mk_shape *s, mk_vec3 d, int *feature)
+{
+    return mk_core_support_typed(s, s->type, d, feature);
 }
 
 /* Number of vertices mk_core_support can name for a polytope core (sphere 1,

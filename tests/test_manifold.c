@@ -781,6 +781,156 @@ START_TEST(ids_stable_box_on_box)
 }
 END_TEST
 
+
+/* ---- hulls ---------------------------------------------------------------- */
+
+static mk_hull *make_hull(const mk_vec3 *pts, int n)
+{
+    mk_hull *h = NULL;
+    MK_ASSERT_STATUS(mk_hull_create(pts, n, NULL, &h), MK_OK);
+    return h;
+}
+
+/* A hull cube on a plane and on a box: the bottom face's four vertices,
+ * named by the hull's own vertex indices and face. */
+START_TEST(hull_cube_contacts)
+{
+    mk_vec3 pts[8];
+    mk_hull *h;
+    mk_shape cube, ground, box;
+    mk_manifold m;
+    int i;
+    for (i = 0; i < 8; ++i) pts[i] = corner(mk_v3(0.5, 0.5, 0.5), i);
+    h = make_hull(pts, 8);
+    mk_shape_hull(h, 0, &cube);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &ground);
+    mk_shape_box(mk_v3(2, 2, 0.5), 0, &box);
+    m = collide(&cube, turned(mk_v3(1, 1, 0.49), mk_v3(0, 0, 1), 0.3), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 4);
+    for (i = 0; i < 4; ++i) {
+        int v = MK_FEATURE_GET_INDEX(MK_FEATURE_PAIR_A(m.points[i].features));
+        ck_assert_int_eq((int)MK_FEATURE_TYPE(MK_FEATURE_PAIR_A(m.points[i].features)), MK_FEATURE_VERTEX);
+        MK_ASSERT_NEAR(h->vertices[v].z, -0.5, 0);
+        MK_ASSERT_NEAR(m.points[i].depth, 0.01, 4 * TOL);
+    }
+    /* On a box (GJK/EPA normal, face clipping): the same four vertices against the box's top face. */
+    m = collide(&box, at(0, 0, 0), &cube, turned(mk_v3(0.3, -0.2, 0.99), mk_v3(0, 0, 1), 0.3), 0);
+    ck_assert_int_eq(m.count, 4);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, 1), 1e-9 + 4 * TOL);
+    for (i = 0; i < 4; ++i) {
+        ck_assert_uint_eq(MK_FEATURE_PAIR_A(m.points[i].features), F(5));
+        MK_ASSERT_NEAR(m.points[i].depth, 0.01, 1e-9 + 4 * TOL);
+    }
+    mk_hull_destroy(h);
+}
+END_TEST
+
+/* A 64-sided prism standing on a plane: its bottom face has more vertices
+ * than a feature holds, so it is decimated from the support vertex on; the
+ * manifold still spans the face and every depth is exact. */
+START_TEST(hull_large_face_on_plane)
+{
+    mk_vec3 pts[128];
+    mk_hull *h;
+    mk_shape prism, ground;
+    mk_manifold m;
+    mk_real span = 0;
+    int i, j;
+    for (i = 0; i < 64; ++i) {
+        double a = 2 * 3.14159265358979 * i / 64;
+        pts[2 * i] = mk_v3((mk_real)cos(a), (mk_real)sin(a), -0.3);
+        pts[2 * i + 1] = mk_v3((mk_real)cos(a), (mk_real)sin(a), 0.3);
+    }
+    h = make_hull(pts, 128);
+    mk_shape_hull(h, 0, &prism);
+    mk_shape_plane(mk_v3(0, 0, 1), 0, &ground);
+    m = collide(&prism, at(0, 0, 0.28), &ground, at(0, 0, 0), 0);
+    ck_assert_int_eq(m.count, 4);
+    for (i = 0; i < 4; ++i) {
+        MK_ASSERT_NEAR(m.points[i].depth, 0.02, 4 * TOL);
+        for (j = 0; j < i; ++j) span = mk_max(span, mk_v3_dist(m.points[i].point_a, m.points[j].point_a));
+    }
+    ck_assert(span > 1.9); /* a diameter of the unit disc, up to the decimation */
+    mk_hull_destroy(h);
+}
+END_TEST
+
+/* Random hulls against hulls and boxes: invariants, and the deepest point
+ * is the exact depth of the brute-force oracle. */
+START_TEST(hull_random_exact_depth)
+{
+    mk_rng r = {23};
+    mk_vec3 pts[32];
+    mk_hull *ha, *hb;
+    mk_shape sa, sb, box;
+    int i, k, n = 0;
+    for (k = 0; k < 32; ++k) pts[k] = mk_v3_mul(mk_rng_dir(&r), mk_v3(1, 0.6, 0.4));
+    ha = make_hull(pts, 32);
+    for (k = 0; k < 20; ++k) pts[k] = mk_v3_mul(mk_rng_v3(&r, -1, 1), mk_v3(0.5, 0.8, 0.3));
+    hb = make_hull(pts, 20);
+    mk_shape_hull(ha, 0, &sa);
+    mk_shape_hull(hb, 0, &sb);
+    mk_shape_box(mk_v3(0.4, 0.3, 0.6), 0, &box);
+    for (i = 0; i < 300; ++i) {
+        mk_oracle_result o;
+        mk_manifold m;
+        const mk_shape *b = i & 1 ? &box : &sb;
+        mk_transform xa = mk_transform_make(mk_rng_v3(&r, -5, 5), mk_rng_quat(&r));
+        mk_transform xb = mk_transform_make(mk_v3_mad(xa.p, (mk_real)mk_rng_range(&r, 0.1, 1.5), mk_rng_dir(&r)), mk_rng_quat(&r));
+        ck_assert_int_eq(mk_oracle_distance(&sa, xa, b, xb, &o), 0);
+        m = collide(&sa, xa, b, xb, 0);
+        if (o.distance > 0) {
+            ck_assert_int_eq(m.count, 0);
+            continue;
+        }
+        n++;
+        ck_assert_int_ge(m.count, 1);
+        MK_ASSERT_NEAR(max_depth(&m), -(double)o.distance, 100 * TOL);
+    }
+    ck_assert_int_gt(n, 50);
+    mk_hull_destroy(ha);
+    mk_hull_destroy(hb);
+}
+END_TEST
+
+
+/* A box balanced on one edge on another box, with tilt noise of 1e-4 rad:
+ * the face axis of A and the edge-pair axes tie to round-off, so cold calls
+ * (no cache) swap between a 2-point face clip and a 1-point edge contact
+ * frame after frame; with the cache the axis kind is kept (hysteresis,
+ * MK_SAT_PREFER_*), so the feature IDs hardly ever change. */
+START_TEST(hysteresis_box_on_edge)
+{
+    mk_shape a;
+    mk_manifold_cache cache;
+    mk_manifold m, prev, cold, prev_cold;
+    mk_rng r = {31};
+    int f, warm_changes = 0, cold_changes = 0;
+    mk_real lift = (mk_real)(0.15 + sqrt(0.35 * 0.35 + 0.15 * 0.15) * cos(3.14159265358979 / 4 - atan2(0.15, 0.35)));
+    mk_shape_box(mk_v3(0.35, 0.35, 0.15), 0, &a);
+    memset(&cache, 0, sizeof cache);
+    for (f = 0; f < 300; ++f) {
+        mk_vec3 axis = mk_rng_v3(&r, -1, 1);
+        mk_quat q = mk_quat_mul(mk_quat_from_axis_angle(axis, (mk_real)(1e-4 * mk_rng_range(&r, -1, 1))),
+                                mk_quat_from_axis_angle(mk_v3(0, 1, 0), (mk_real)(3.14159265358979 / 4)));
+        mk_transform xb = mk_transform_make(mk_v3(0.05, 0.02, lift - (mk_real)0.001), q);
+        MK_ASSERT_STATUS(mk_collide(&a, at(0, 0, 0), &a, xb, 0, &cache, &m), MK_OK);
+        cold = collide(&a, at(0, 0, 0), &a, xb, 0);
+        ck_assert_int_ge(m.count, 1);
+        if (f > 0) {
+            warm_changes += !same_ids(&prev, &m);
+            cold_changes += !same_ids(&prev_cold, &cold);
+        }
+        prev = m;
+        prev_cold = cold;
+    }
+#if !defined(MK_SINGLE)
+    ck_assert_int_gt(cold_changes, 50); /* float's rounding happens to break this tie the same way every frame */
+#endif
+    ck_assert_int_le(warm_changes, 10);
+}
+END_TEST
+
 static Suite *manifold_suite(void)
 {
     Suite *s = suite_create("manifold");
@@ -799,11 +949,15 @@ static Suite *manifold_suite(void)
     tcase_add_test(tc, box_box_edge_contacts);
     tcase_add_test(tc, box_box_random_exact_depth);
     tcase_add_test(tc, smooth_pairs_through_gjk);
+    tcase_add_test(tc, hull_cube_contacts);
+    tcase_add_test(tc, hull_large_face_on_plane);
+    tcase_add_test(tc, hull_random_exact_depth);
     suite_add_tcase(s, tc);
     tc = tcase_create("feature_ids");
     tcase_add_test(tc, ids_stable_box_sliding_on_plane);
     tcase_add_test(tc, seed000_id_matching_beats_distance);
     tcase_add_test(tc, ids_stable_box_on_box);
+    tcase_add_test(tc, hysteresis_box_on_edge);
     suite_add_tcase(s, tc);
     return s;
 }

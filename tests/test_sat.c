@@ -302,6 +302,41 @@ START_TEST(hull_hull_random)
 }
 END_TEST
 
+START_TEST(degenerate_gauss_maps)
+{
+    /* Parallel faces and edges put B's Gauss-map arcs through A's face normals
+     * and along A's arcs: every sign test is zero there, the walk gives up
+     * and the edge is scanned. Boxes and cube hulls with equal or
+     * axis-swapping rotations, generic path, against the brute force. */
+    mk_rng r = {26};
+    mk_vec3 cube[8];
+    mk_hull *ca, *cb;
+    int i, k;
+    for (k = 0; k < 8; ++k) cube[k] = mk_v3(k & 1 ? 1 : -1, k & 2 ? (mk_real)0.5 : (mk_real)-0.5, k & 4 ? 2 : -2);
+    MK_ASSERT_STATUS(mk_hull_create(cube, 8, NULL, &ca), MK_OK);
+    for (k = 0; k < 8; ++k) cube[k] = mk_v3(k & 1 ? (mk_real)0.3 : (mk_real)-0.3, k & 2 ? 1 : -1, k & 4 ? (mk_real)0.7 : (mk_real)-0.7);
+    MK_ASSERT_STATUS(mk_hull_create(cube, 8, NULL, &cb), MK_OK);
+    for (i = 0; i < 200; ++i) {
+        static const mk_real quarter[4][4] = {{0, 0, 0, 1}, {0.70710678118654752, 0, 0, 0.70710678118654752},
+                                              {0, 0.70710678118654752, 0, 0.70710678118654752}, {0.5, 0.5, 0.5, 0.5}};
+        const mk_real *qq = quarter[i % 4];
+        mk_mat3 R = mk_mat3_from_quat(mk_quat_normalize(mk_quat_make(qq[0], qq[1], qq[2], qq[3])));
+        mk_vec3 t = i < 100 ? mk_rng_v3(&r, -2.5, 2.5) : mk_v3((mk_real)mk_rng_range(&r, -1.5, 1.5), 0, 0);
+        mk_box_hull ba, bb;
+        mk_shape sa, sb;
+        mk_box_hull_init(&ba, mk_v3(1, 0.5, 2));
+        mk_box_hull_init(&bb, mk_v3((mk_real)0.3, 1, (mk_real)0.7));
+        mk_shape_hull(ca, 0, &sa);
+        mk_shape_hull(cb, 0, &sb);
+        check_query(ca, cb, &R, t, &sa, &sb, 4, NULL);
+        check_query(&ba.hull, &bb.hull, &R, t, NULL, NULL, 4, NULL);
+        check_query(ca, &bb.hull, &R, t, NULL, NULL, 4, NULL);
+    }
+    mk_hull_destroy(ca);
+    mk_hull_destroy(cb);
+}
+END_TEST
+
 /* Exact depth of two boxes in world poses against the oracle. */
 static void check_boxes_world(mk_vec3 ha, mk_transform xa, mk_vec3 hb, mk_transform xb, double rel_tol, mk_sat_result *out)
 {
@@ -480,6 +515,7 @@ static Suite *sat_suite(void)
     tcase_add_test(tc, box_view_matches_manifold_numbering);
     tcase_add_test(tc, box_box_random);
     tcase_add_test(tc, hull_hull_random);
+    tcase_add_test(tc, degenerate_gauss_maps);
     tcase_add_test(tc, box_families);
     tcase_add_test(tc, libccd_25_stacked_cubes);
     tcase_add_test(tc, early_stop);

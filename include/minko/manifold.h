@@ -14,18 +14,24 @@
  * margin so it does not flicker between frames. Feature IDs are stable while
  * the same features touch, so a host can key its warm-start cache on them
  * (minko/contact_cache.h). An optional caller-owned mk_manifold_cache per
- * pair (zero-initialised = cold) carries the previous frame's reference face
- * and GJK simplex: when two faces face each other within the tolerance, the
- * pair keeps clipping against last frame's face, so a rocking stack does not
- * swap its reference face, normal and feature IDs every few frames; cold, the
- * reference is the exact minimum axis. Bad input (NULL, NaN/Inf,
- * non-unit rotations, invalid shapes, a negative margin) returns a status
- * and leaves *out untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing
- * allocates; every query runs in A's local frame. Pairs available today:
- * sphere, capsule and box among themselves except box-box, and sphere, box,
- * capsule, cylinder and cone against a plane; the others (box-box and hulls
- * through SAT, the remaining smooth pairs through GJK/EPA) return
- * MK_ERR_UNSUPPORTED until those modules are in the library.
+ * pair (zero-initialised = cold) carries the previous frame's choices: for
+ * boxes and hulls the kind of separating axis (face of A, face of B, edge
+ * pair), kept while it stays within 5 % (plus 0.5 % of the size) of the best
+ * one, and for the other pairs the reference face, kept while it faces the
+ * normal within the tolerance, plus the GJK simplex. A rocking stack thus
+ * keeps its normal and feature IDs; the price is that warm frames may report
+ * the kept axis's depth instead of the minimum. A cold call (no cache, or a
+ * new contact) is exact. Bad input (NULL, NaN/Inf, non-unit rotations,
+ * invalid shapes, a negative margin) returns a status and leaves *out
+ * untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing allocates;
+ * every query runs in A's local frame. Methods: closed forms for sphere,
+ * capsule and box-capsule pairs and for anything against a plane; SAT
+ * (src/sat.h) with reference/incident face clipping for box and hull pairs;
+ * the exact GJK/EPA normal and closest points for the rest (cylinders,
+ * cones, spheres and capsules against hulls), whose support faces are then
+ * clipped. A build without SAT (MK_WITHOUT) takes GJK/EPA for box and hull
+ * pairs too; one without GJK or EPA returns MK_ERR_UNSUPPORTED for the pairs
+ * that need them.
  *
  * Feature indices per shape type: box vertices 0..7 are the corner bits zyx
  * (bit set = +extent), box edges 0..11 are 4*axis + the corner bits of the
@@ -94,6 +100,7 @@ typedef struct mk_manifold_cache {
     mk_gjk_cache gjk;   /* GJK warm start of pairs without a closed form */
     int reference;      /* internal: 1 / 2 when the last manifold was clipped against a face of A / B */
     mk_feature face;    /* internal: that face */
+    int axis;           /* internal: kind of the last SAT axis of a box or hull pair, 0 = none */
 } mk_manifold_cache;
 
 /* The contact manifold of shapes a (pose xa) and b (pose xb). `margin` >= 0:
