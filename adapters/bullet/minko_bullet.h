@@ -15,6 +15,7 @@
 #define MINKO_BULLET_H
 
 #include <btBulletCollisionCommon.h>
+#include <BulletDynamics/Dynamics/btDiscreteDynamicsWorld.h>
 
 #include <atomic>
 #include <mutex>
@@ -24,6 +25,7 @@
 #include "minko/broadphase.h"
 #include "minko/manifold.h"
 #include "minko/shape.h"
+#include "minko/toi.h"
 
 static_assert(sizeof(btScalar) == sizeof(mk_real),
               "minko_bullet: Bullet's btScalar and Minko's mk_real differ; build double Minko with "
@@ -219,6 +221,60 @@ bool set_narrowphase(btCollisionWorld *world, Backend b);
 // dropped and rebuilt at the next step. Returns the previous broadphase, which
 // the caller now owns (the world never owned it).
 btBroadphaseInterface *set_broadphase(btCollisionWorld *world, btBroadphaseInterface *replacement);
+
+// A btDiscreteDynamicsWorld whose continuous collision runs on Minko's time
+// of impact (minko/toi.h). Which bodies get it is Bullet's rule, with the
+// motion measured where it is largest: setCcdMotionThreshold() > 0 and a step
+// that moves the centre, plus the turn times the bounding radius, farther
+// than that (Bullet looks at the centre only, so a fast spinner never gets
+// CCD). Bullet sweeps a sphere of setCcdSweptSphereRadius() (a stand-in for
+// the shape, rotation ignored) against the world; here the body's own shape,
+// turning as it does over the step, is swept against every shape its swept
+// box touches (others held at their pose, as Bullet does), and the first
+// contact is exact to the TOI tolerance. Both of Bullet's hooks are replaced:
+// integrateTransforms() clamps the motion to the time of impact and
+// createPredictiveContacts() adds the speculative contact between the two
+// features that meet, with the gap along their normal. Candidates are
+// filtered like Bullet's btClosestNotMeConvexResultCallback (group / mask,
+// the pair cache's filter callback, needsCollision and needsResponse). A body
+// whose sweep meets a shape Minko does not model (a mesh, a compound) runs
+// Bullet's own sweep for that step, and so does the whole world while
+// setApplySpeculativeContactRestitution(true) is set. Shapes are mapped
+// through the world's mkb::CollisionConfiguration when it has one (hull
+// cache), else primitives only.
+class CcdWorld : public btDiscreteDynamicsWorld {
+public:
+    CcdWorld(btDispatcher *dispatcher, btBroadphaseInterface *broadphase, btConstraintSolver *solver,
+             btCollisionConfiguration *config);
+    ~CcdWorld() override;
+
+    struct Stats {
+        long queries = 0;           // CCD sweeps answered by Minko
+        long clamped = 0;           // motions stopped at a time of impact
+        long predictive = 0;        // speculative contacts added
+        long native_fallbacks = 0;  // sweeps left to Bullet (a shape Minko does not model)
+    };
+    const Stats &ccd_stats() const { return m_stats; }
+
+protected:
+    void integrateTransforms(btScalar timeStep) override;
+    void createPredictiveContacts(btScalar timeStep) override;
+
+private:
+    struct Hit {
+        btCollisionObject *object;
+        mk_real t;
+        mk_toi_result result;
+        mk_sweep pose_a;
+    };
+    mk_status map(const btCollisionShape *shape, ShapeMap *out);
+    bool needs_ccd(btRigidBody *body, btScalar dt, btTransform *predicted);
+    int earliest_hit(btRigidBody *body, const btTransform &predicted, Hit *hit);
+
+    CollisionConfiguration *m_config;
+    std::vector<btCollisionObject *> m_candidates;
+    Stats m_stats;
+};
 
 }  // namespace mkb
 

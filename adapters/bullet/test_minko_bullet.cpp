@@ -930,6 +930,8 @@ START_TEST(np_conventions_match_bullet)
         hull.addPoint(btVector3((btScalar)(0.7 * p.x), (btScalar)(0.4 * p.y), (btScalar)(0.5 * p.z)), false);
     }
     hull.recalcLocalAabb();
+    btConvexHullShape sharp_hull(&hull.getPoints()[0].getX(), hull.getNumPoints(), sizeof(btVector3));
+    sharp_hull.setMargin(0);  // the sharp core: Minko's polytope path without rounding
     struct Case {
         const char *name;
         btCollisionShape *a, *b;
@@ -944,6 +946,8 @@ START_TEST(np_conventions_match_bullet)
         {"box-box", &box, &box, false, false},  // btBoxBoxDetector is dBoxBox: not exact (5 % face preference)
         {"hull-plane", &hull, &plane, false, false},       {"sphere-hull", &sphere, &hull, false, false},
         {"hull-box", &hull, &box, false, false},           {"hull-hull", &hull, &hull, false, false},
+        {"sharp hull-box", &sharp_hull, &box, false, false}, {"sharp hull-hull", &sharp_hull, &sharp_hull, false, false},
+        {"sharp hull-plane", &sharp_hull, &plane, false, false},
     };
     mk_rng rng = {777};
     int compared = 0;
@@ -1135,6 +1139,137 @@ START_TEST(np_switch_at_run_time)
 }
 END_TEST
 
+// ---- continuous collision -----------------------------------------------------
+
+// One world of a given kind with gravity off; bodies owned by the caller.
+struct CcdRig {
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher{&config};
+    btDbvtBroadphase bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld *world;
+    explicit CcdRig(bool minko)
+    {
+        if (minko) world = new mkb::CcdWorld(&dispatcher, &bp, &solver, &config);
+        else world = new btDiscreteDynamicsWorld(&dispatcher, &bp, &solver, &config);
+        world->setGravity(btVector3(0, 0, 0));
+    }
+    ~CcdRig() { delete world; }
+};
+
+// A 0.05 sphere fired at 300 m/s (5 m per step) at a 0.1-thick wall: without
+// CCD it passes; Bullet's CCD and Minko's both stop it on the near side, and
+// Minko's stops it with a speculative contact at the time of impact or by
+// clamping its motion there.
+START_TEST(ccd_sphere_does_not_tunnel)
+{
+    btBoxShape wall(btVector3(btScalar(0.05), 2, 2));
+    btSphereShape ball(btScalar(0.05));
+    for (int mode = 0; mode < 3; mode++) {  // 0: no CCD, 1: Bullet's, 2: Minko's
+        CcdRig rig(mode == 2);
+        btRigidBody w(0, nullptr, &wall);
+        btVector3 inertia;
+        ball.calculateLocalInertia(btScalar(0.1), inertia);
+        btRigidBody b(btScalar(0.1), nullptr, &ball, inertia);
+        b.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(-7.3), 0, 0)));
+        b.setLinearVelocity(btVector3(300, 0, 0));
+        b.setActivationState(DISABLE_DEACTIVATION);
+        if (mode) {
+            b.setCcdMotionThreshold(btScalar(0.05));
+            b.setCcdSweptSphereRadius(btScalar(0.04));
+        }
+        rig.world->addRigidBody(&w);
+        rig.world->addRigidBody(&b);
+        double first_stop = 0;
+        for (int i = 0; i < 20; i++) {
+            rig.world->stepSimulation(btScalar(1) / 60, 0);
+            if (!first_stop && b.getLinearVelocity().x() < 100) first_stop = b.getWorldTransform().getOrigin().x();
+        }
+        const double x = b.getWorldTransform().getOrigin().x();
+        if (mode == 0) ck_assert_msg(x > 0.1, "no CCD: the sphere should pass (x = %g)", x);
+        else ck_assert_msg(x < 0, "CCD mode %d: the sphere passed the wall (x = %g)", mode, x);
+        if (mode == 2) {
+            mkb::CcdWorld *cw = static_cast<mkb::CcdWorld *>(rig.world);
+            ck_assert_int_gt(cw->ccd_stats().clamped + cw->ccd_stats().predictive, 0);
+            ck_assert_int_eq(cw->ccd_stats().native_fallbacks, 0);
+        }
+        rig.world->removeRigidBody(&b);
+        rig.world->removeRigidBody(&w);
+    }
+}
+END_TEST
+
+// A rod 2 long spinning at 100 rad/s (tips at 100 m/s, 95 degrees a step)
+// next to a thin plate its tips sweep through. Its centre does not move, so
+// Bullet never runs CCD for it and the rod spins through the plate; Minko's
+// rule measures the tips' motion and its time of impact follows the turn, so
+// the rod stops at the plate.
+START_TEST(ccd_spinning_rod)
+{
+    btBoxShape rod(btVector3(1, btScalar(0.02), btScalar(0.02)));
+    btBoxShape plate(btVector3(btScalar(0.02), btScalar(0.15), btScalar(0.5)));
+    for (int minko = 0; minko < 2; minko++) {
+        CcdRig rig(minko != 0);
+        btRigidBody p(0, nullptr, &plate);
+        p.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.8), btScalar(0.3), 0)));
+        btVector3 inertia;
+        rod.calculateLocalInertia(1, inertia);
+        btRigidBody r(1, nullptr, &rod, inertia);
+        r.setAngularVelocity(btVector3(0, 0, 100));
+        r.setActivationState(DISABLE_DEACTIVATION);
+        r.setCcdMotionThreshold(btScalar(0.01));
+        r.setCcdSweptSphereRadius(btScalar(0.01));
+        rig.world->addRigidBody(&p);
+        rig.world->addRigidBody(&r);
+        // How far the rod's long axis turns about z (unwrapped), whatever it
+        // does about its own axis after a one-point hit.
+        double turned = 0;
+        for (int i = 0; i < 30; i++) {
+            btVector3 a0 = r.getWorldTransform().getBasis().getColumn(0);
+            rig.world->stepSimulation(btScalar(1) / 60, 0);
+            btVector3 a1 = r.getWorldTransform().getBasis().getColumn(0);
+            double d = std::atan2((double)a1.y(), (double)a1.x()) - std::atan2((double)a0.y(), (double)a0.x());
+            while (d > SIMD_PI) d -= 2 * SIMD_PI;
+            while (d < -SIMD_PI) d += 2 * SIMD_PI;
+            turned += d;
+        }
+        if (minko) ck_assert_msg(turned < 0.6, "Minko: the rod turned %g rad, through the plate", turned);
+        else ck_assert_msg(turned > 2 * SIMD_PI, "Bullet: expected the rod to spin through (turned %g)", turned);
+        rig.world->removeRigidBody(&r);
+        rig.world->removeRigidBody(&p);
+    }
+}
+END_TEST
+
+// A sweep that meets a triangle mesh is Bullet's own (Minko does not model
+// meshes), and it still stops the sphere.
+START_TEST(ccd_mesh_falls_back_to_bullet)
+{
+    btTriangleMesh tris;
+    tris.addTriangle(btVector3(-5, 0, -5), btVector3(5, 0, -5), btVector3(-5, 0, 5));
+    tris.addTriangle(btVector3(5, 0, -5), btVector3(5, 0, 5), btVector3(-5, 0, 5));
+    btBvhTriangleMeshShape mesh(&tris, true);
+    btSphereShape ball(btScalar(0.1));
+    CcdRig rig(true);
+    btRigidBody m(0, nullptr, &mesh);
+    btVector3 inertia;
+    ball.calculateLocalInertia(1, inertia);
+    btRigidBody b(1, nullptr, &ball, inertia);
+    b.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 3, 0)));
+    b.setLinearVelocity(btVector3(0, -200, 0));
+    b.setActivationState(DISABLE_DEACTIVATION);
+    b.setCcdMotionThreshold(btScalar(0.1));
+    b.setCcdSweptSphereRadius(btScalar(0.08));
+    rig.world->addRigidBody(&m);
+    rig.world->addRigidBody(&b);
+    for (int i = 0; i < 10; i++) rig.world->stepSimulation(btScalar(1) / 60, 0);
+    ck_assert(b.getWorldTransform().getOrigin().y() > -0.05);
+    ck_assert_int_gt(static_cast<mkb::CcdWorld *>(rig.world)->ccd_stats().native_fallbacks, 0);
+    rig.world->removeRigidBody(&b);
+    rig.world->removeRigidBody(&m);
+}
+END_TEST
+
 Suite *suite()
 {
     Suite *s = suite_create("minko_bullet");
@@ -1169,6 +1304,12 @@ Suite *suite()
     tcase_add_test(n, np_shape_changes_seen);
     tcase_add_test(n, np_switch_at_run_time);
     suite_add_tcase(s, n);
+    TCase *c = tcase_create("ccd");
+    tcase_set_timeout(c, 60);
+    tcase_add_test(c, ccd_sphere_does_not_tunnel);
+    tcase_add_test(c, ccd_spinning_rod);
+    tcase_add_test(c, ccd_mesh_falls_back_to_bullet);
+    suite_add_tcase(s, c);
     return s;
 }
 
