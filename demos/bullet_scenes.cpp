@@ -55,33 +55,36 @@ double ms_since(Clock::time_point t0)
 // Wraps any btDiscreteDynamicsWorld subclass. The three overridden members are
 // virtual in btCollisionWorld and performDiscreteCollisionDetection calls the
 // other two, so the timers sit exactly around Bullet's own phases.
+struct Timers {
+    double aabb_ms = 0, pairs_ms = 0, collision_ms = 0;
+    void reset() { aabb_ms = pairs_ms = collision_ms = 0; }
+};
+
 template <class World>
 class Timed : public World {
 public:
     Timed(btDispatcher *d, btBroadphaseInterface *b, btConstraintSolver *s, btCollisionConfiguration *c)
         : World(d, b, s, c) {}
-    double aabb_ms = 0, pairs_ms = 0, collision_ms = 0;
-    void reset_timers() { aabb_ms = pairs_ms = collision_ms = 0; }
+    Timers timers;
     void performDiscreteCollisionDetection() override
     {
         Clock::time_point t0 = Clock::now();
         World::performDiscreteCollisionDetection();
-        collision_ms += ms_since(t0);
+        timers.collision_ms += ms_since(t0);
     }
     void updateAabbs() override
     {
         Clock::time_point t0 = Clock::now();
         World::updateAabbs();
-        aabb_ms += ms_since(t0);
+        timers.aabb_ms += ms_since(t0);
     }
     void computeOverlappingPairs() override
     {
         Clock::time_point t0 = Clock::now();
         World::computeOverlappingPairs();
-        pairs_ms += ms_since(t0);
+        timers.pairs_ms += ms_since(t0);
     }
 };
-typedef Timed<btDiscreteDynamicsWorld> TimedWorld;
 
 // ---- backends -------------------------------------------------------------------
 
@@ -89,13 +92,15 @@ struct Backend {
     const char *name;
     bool minko_broadphase;
     bool minko_narrowphase;
+    bool minko_ccd;  // mkb::CcdWorld: only where a scene turns CCD on
 };
 
 const Backend kBackends[] = {
-    {"native", false, false},
-    {"minko_bp", true, false},
-    {"minko_np", false, true},
-    {"minko", true, true},
+    {"native", false, false, false},
+    {"minko_bp", true, false, false},
+    {"minko_np", false, true, false},
+    {"minko", true, true, false},
+    {"minko+ccd", true, true, true},
 };
 const int kBackendCount = (int)(sizeof kBackends / sizeof kBackends[0]);
 
@@ -109,7 +114,8 @@ struct Pipeline {
     btCollisionDispatcher *dispatcher = nullptr;
     btBroadphaseInterface *broadphase = nullptr;
     btSequentialImpulseConstraintSolver *solver = nullptr;
-    TimedWorld *world = nullptr;
+    btDiscreteDynamicsWorld *world = nullptr;
+    Timers *timers = nullptr;
 
     explicit Pipeline(const Backend &b)
     {
@@ -119,7 +125,15 @@ struct Pipeline {
         if (b.minko_broadphase) broadphase = new mkb::Broadphase(g_bp_kind);
         else broadphase = new btDbvtBroadphase();
         solver = new btSequentialImpulseConstraintSolver();
-        world = new TimedWorld(dispatcher, broadphase, solver, config);
+        if (b.minko_ccd) {
+            Timed<mkb::CcdWorld> *w = new Timed<mkb::CcdWorld>(dispatcher, broadphase, solver, config);
+            world = w;
+            timers = &w->timers;
+        } else {
+            Timed<btDiscreteDynamicsWorld> *w = new Timed<btDiscreteDynamicsWorld>(dispatcher, broadphase, solver, config);
+            world = w;
+            timers = &w->timers;
+        }
         // Pairs processed in uid order and islands sorted: the only way two
         // broadphases that report the same pairs give the same trajectories.
         world->getDispatchInfo().m_deterministicOverlappingPairs = true;
@@ -208,6 +222,12 @@ struct SceneSpec {
         b.has_keep = true;
         b.keep_n = btVector3(0, -1, 0);
         b.keep_d = half_height;  // centre below y = -half_height: entirely under the top face
+    }
+    bool uses_ccd() const
+    {
+        for (const BodySpec &b : bodies)
+            if (b.ccd) return true;
+        return false;
     }
     int dynamic_count() const
     {
@@ -396,6 +416,28 @@ void scene_convex_stack(SceneSpec &s)
     }
 }
 
+// A pile of 1000 spheres and capsules (radius 0.5; capsules 0.3 x 1.2 along Y)
+// dropped from a 10 x 10 x 10 grid onto the ground: the closed-form pairs.
+void scene_prim_pile(SceneSpec &s)
+{
+    s.name = "prim_pile";
+    s.variant = "1000_spheres_capsules";
+    s.steps = 600;
+    s.quick_steps = 30;
+    s.drift_from = 2.0 / 3.0;
+    s.judge_every = 10;
+    benchmark_setup(s);
+    int ball = s.add_shape(new btSphereShape(btScalar(0.5)));
+    int cap = s.add_shape(new btCapsuleShape(btScalar(0.3), btScalar(0.6)));
+    for (int k = 0; k < 10; k++)
+        for (int j = 0; j < 10; j++)
+            for (int i = 0; i < 10; i++) {
+                const bool sphere = (i + j + k) % 2 == 0;
+                btVector3 at(btScalar(-9 + 2 * i + 0.1 * k), btScalar(1 + 2.2 * k), btScalar(-9 + 2 * j - 0.1 * k));
+                s.keep_above_ground(s.add_body(sphere ? ball : cap, 1, at), sphere ? btScalar(0.5) : btScalar(0.3));
+            }
+}
+
 // Stability scenes: Bullet's default solver (10 iterations), no sleeping so
 // jitter shows in drift and kinetic energy instead of being frozen away.
 void stability_setup(SceneSpec &s, btScalar ground_half)
@@ -523,9 +565,11 @@ void mk_tiny(SceneSpec &s, int) { scene_tiny_boxes(s); }
 void mk_huge(SceneSpec &s, int) { scene_huge_boxes(s); }
 void mk_wall(SceneSpec &s, int ccd) { scene_sphere_wall(s, ccd != 0); }
 void mk_hulls(SceneSpec &s, int) { scene_random_hulls(s); }
+void mk_prims(SceneSpec &s, int) { scene_prim_pile(s); }
 
 const SceneEntry kScenes[] = {
     {"3000_boxes", mk_3000, 0},     {"1000_stack", mk_1000, 0},   {"convex_stack", mk_convex, 0},
+    {"prim_pile", mk_prims, 0},
     {"tower", mk_tower, 0},         {"mass_ratio_100", mk_ratio, 100}, {"mass_ratio_1000", mk_ratio, 1000},
     {"tiny_boxes", mk_tiny, 0},     {"huge_boxes", mk_huge, 0},   {"sphere_wall", mk_wall, 0},
     {"sphere_wall_ccd", mk_wall, 1}, {"random_hulls", mk_hulls, 0},
@@ -658,7 +702,7 @@ Result run(const SceneSpec &scene, const Backend &backend, int steps)
     res.backend = std::string(kBulletTag) + "." + backend.name;
     res.steps = steps;
     Pipeline p(backend);
-    TimedWorld *world = p.world;
+    btDiscreteDynamicsWorld *world = p.world;
     world->setGravity(btVector3(0, -10, 0));
     world->getSolverInfo().m_numIterations = scene.iterations;
     if (scene.friction_caching) world->getSolverInfo().m_solverMode |= SOLVER_ENABLE_FRICTION_DIRECTION_CACHING;
@@ -697,12 +741,12 @@ Result run(const SceneSpec &scene, const Backend &backend, int steps)
     for (int step = 0; step < steps; step++) {
         if (step == drift_step)
             for (btRigidBody *b : bodies) drift_ref.push_back(b->getWorldTransform().getOrigin());
-        world->reset_timers();
+        p.timers->reset();
         Clock::time_point t0 = Clock::now();
         world->stepSimulation(scene.dt, 0);
         t_step.push_back(ms_since(t0));
-        t_coll.push_back(world->collision_ms);
-        t_bp.push_back(world->aabb_ms + world->pairs_ms);
+        t_coll.push_back(p.timers->collision_ms);
+        t_bp.push_back(p.timers->aabb_ms + p.timers->pairs_ms);
 
         sum_pairs += world->getPairCache()->getNumOverlappingPairs();
         btDispatcher *d = world->getDispatcher();
@@ -853,6 +897,7 @@ int main(int argc, char **argv)
         Result native;
         for (int b = 0; b < kBackendCount; b++) {
             const Backend &be = kBackends[b];
+            if (be.minko_ccd && !scene.uses_ccd()) continue;
             if (b > 0 && !only_backends.empty() &&
                 std::find(only_backends.begin(), only_backends.end(), be.name) == only_backends.end())
                 continue;

@@ -15,14 +15,17 @@
 #define MINKO_BULLET_H
 
 #include <btBulletCollisionCommon.h>
+#include <BulletDynamics/Dynamics/btDiscreteDynamicsWorld.h>
 
 #include <atomic>
-#include <map>
+#include <mutex>
+#include <unordered_map>
 #include <vector>
 
 #include "minko/broadphase.h"
 #include "minko/manifold.h"
 #include "minko/shape.h"
+#include "minko/toi.h"
 
 static_assert(sizeof(btScalar) == sizeof(mk_real),
               "minko_bullet: Bullet's btScalar and Minko's mk_real differ; build double Minko with "
@@ -47,10 +50,15 @@ inline btVector3 to_bt(mk_vec3 v) { return btVector3(v.x, v.y, v.z); }
 inline mk_quat to_mk(const btQuaternion &q) { return mk_quat_make(q.x(), q.y(), q.z(), q.w()); }
 
 // Maps every supported shape but btConvexHullShape, which needs a Minko hull
-// built once per shape (see the collision configuration's hull cache).
+// built once per shape (see the collision configuration's hull cache); a hull
+// shape's margin is read by refresh_map().
 // MK_ERR_UNSUPPORTED for other types; Minko's own status for sizes Minko
 // refuses (e.g. a box with a zero extent).
 mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out);
+
+// Brings a mapping made earlier up to date with its shape (a primitive is
+// mapped again, a hull keeps its Minko hull and takes the current margin).
+mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map);
 
 // World pose of the mapped shape for a Bullet world transform.
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map);
@@ -161,8 +169,12 @@ public:
     Backend narrowphase() const { return m_backend; }
     // Takes effect for dispatchers built afterwards; see set_narrowphase() for a running world.
     void set_backend(Backend b) { m_backend = b; }
-    // Shapes of the types above, hulls through the cache. MK_ERR_UNSUPPORTED otherwise.
+    // Shapes of the types above, hulls through the cache (built on first use,
+    // checked against the shape's points, scaling and count). MK_ERR_UNSUPPORTED
+    // otherwise. Thread-safe.
     mk_status map_shape(const btCollisionShape *shape, ShapeMap *out);
+    // Minko hulls built so far (cache size).
+    int hull_count() const;
     // Bullet's own create function for a pair of shape types.
     btCollisionAlgorithmCreateFunc *native_create_func(int proxyType0, int proxyType1)
     {
@@ -180,8 +192,17 @@ public:
 
 private:
     struct CreateFunc;
+    struct HullEntry {
+        mk_hull *hull;
+        unsigned long long fingerprint;
+    };
     Backend m_backend;
     CreateFunc *m_create;
+    mutable std::mutex m_hull_lock;
+    std::unordered_map<const btCollisionShape *, HullEntry> m_hulls;
+    // Hulls replaced because their shape changed (or its address was reused):
+    // algorithms created before may still point at them, so they live on.
+    std::vector<mk_hull *> m_retired;
 };
 
 // True for the shape types the Minko narrowphase is registered for.
@@ -200,6 +221,60 @@ bool set_narrowphase(btCollisionWorld *world, Backend b);
 // dropped and rebuilt at the next step. Returns the previous broadphase, which
 // the caller now owns (the world never owned it).
 btBroadphaseInterface *set_broadphase(btCollisionWorld *world, btBroadphaseInterface *replacement);
+
+// A btDiscreteDynamicsWorld whose continuous collision runs on Minko's time
+// of impact (minko/toi.h). Which bodies get it is Bullet's rule, with the
+// motion measured where it is largest: setCcdMotionThreshold() > 0 and a step
+// that moves the centre, plus the turn times the bounding radius, farther
+// than that (Bullet looks at the centre only, so a fast spinner never gets
+// CCD). Bullet sweeps a sphere of setCcdSweptSphereRadius() (a stand-in for
+// the shape, rotation ignored) against the world; here the body's own shape,
+// turning as it does over the step, is swept against every shape its swept
+// box touches (others held at their pose, as Bullet does), and the first
+// contact is exact to the TOI tolerance. Both of Bullet's hooks are replaced:
+// integrateTransforms() clamps the motion to the time of impact and
+// createPredictiveContacts() adds the speculative contact between the two
+// features that meet, with the gap along their normal. Candidates are
+// filtered like Bullet's btClosestNotMeConvexResultCallback (group / mask,
+// the pair cache's filter callback, needsCollision and needsResponse). A body
+// whose sweep meets a shape Minko does not model (a mesh, a compound) runs
+// Bullet's own sweep for that step, and so does the whole world while
+// setApplySpeculativeContactRestitution(true) is set. Shapes are mapped
+// through the world's mkb::CollisionConfiguration when it has one (hull
+// cache), else primitives only.
+class CcdWorld : public btDiscreteDynamicsWorld {
+public:
+    CcdWorld(btDispatcher *dispatcher, btBroadphaseInterface *broadphase, btConstraintSolver *solver,
+             btCollisionConfiguration *config);
+    ~CcdWorld() override;
+
+    struct Stats {
+        long queries = 0;           // CCD sweeps answered by Minko
+        long clamped = 0;           // motions stopped at a time of impact
+        long predictive = 0;        // speculative contacts added
+        long native_fallbacks = 0;  // sweeps left to Bullet (a shape Minko does not model)
+    };
+    const Stats &ccd_stats() const { return m_stats; }
+
+protected:
+    void integrateTransforms(btScalar timeStep) override;
+    void createPredictiveContacts(btScalar timeStep) override;
+
+private:
+    struct Hit {
+        btCollisionObject *object;
+        mk_real t;
+        mk_toi_result result;
+        mk_sweep pose_a;
+    };
+    mk_status map(const btCollisionShape *shape, ShapeMap *out);
+    bool needs_ccd(btRigidBody *body, btScalar dt, btTransform *predicted);
+    int earliest_hit(btRigidBody *body, const btTransform &predicted, Hit *hit);
+
+    CollisionConfiguration *m_config;
+    std::vector<btCollisionObject *> m_candidates;
+    Stats m_stats;
+};
 
 }  // namespace mkb
 

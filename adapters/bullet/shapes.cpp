@@ -71,6 +71,32 @@ mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out)
     return st;
 }
 
+mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map)
+{
+    // Every step for every pair: compare the few numbers that define the
+    // solid and map again (with validation) only when one changed.
+    const mk_shape &m = map->shape;
+    switch (shape->getShapeType()) {
+    case SPHERE_SHAPE_PROXYTYPE:
+        if (static_cast<const btSphereShape *>(shape)->getRadius() == m.radius) return MK_OK;
+        break;
+    case BOX_SHAPE_PROXYTYPE: {
+        const btVector3 h = static_cast<const btBoxShape *>(shape)->getHalfExtentsWithMargin();
+        if (h.x() == m.u.half_extents.x && h.y() == m.u.half_extents.y && h.z() == m.u.half_extents.z) return MK_OK;
+        break;
+    }
+    case CONVEX_HULL_SHAPE_PROXYTYPE: {
+        const btScalar margin = shape->getMargin();
+        if (margin == m.radius) return MK_OK;
+        if (!(margin >= 0)) return MK_ERR_BAD_SIZE;
+        map->shape.radius = margin;
+        return MK_OK;
+    }
+    default: break;
+    }
+    return map_primitive(shape, map);
+}
+
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map)
 {
     mk_transform t = mk_transform_make(to_mk(world.getOrigin()), to_mk(world.getRotation()));

@@ -28,10 +28,10 @@ const double kRel = 2e-6;
 // Two convex solids are equal iff their support functions are: compare
 // h(d) = max over the solid of d.x for Bullet's shape (its own
 // localGetSupportingVertex, margins included) and for the mapped Minko shape.
-void check_same_solid(const btConvexShape *bt, const char *what)
+void check_same_solid(const btConvexShape *bt, const char *what, mkb::CollisionConfiguration *config = nullptr)
 {
     mkb::ShapeMap m;
-    MK_ASSERT_STATUS(mkb::map_primitive(bt, &m), MK_OK);
+    MK_ASSERT_STATUS(config ? config->map_shape(bt, &m) : mkb::map_primitive(bt, &m), MK_OK);
     btVector3 lo, hi;
     btTransform id;
     id.setIdentity();
@@ -819,18 +819,86 @@ const double kContactTol = 1e-9, kNormalTol = 1e-9;
 const double kContactTol = 2e-4, kNormalTol = 1e-5;
 #endif
 
+// Hulls: the cached Minko hull grown by the margin is Bullet's hull shape
+// (points scaled, margin outside); the cache builds one hull per shape, sees
+// changed points, and refuses degenerate clouds (left to Bullet).
+START_TEST(shape_hull_cache)
+{
+    mkb::CollisionConfiguration config;
+    btConvexHullShape h;
+    mk_rng rng = {31};
+    for (int i = 0; i < 40; i++) {
+        mk_vec3 p = mk_rng_dir(&rng);
+        h.addPoint(btVector3((btScalar)p.x * 2, (btScalar)p.y, (btScalar)p.z * btScalar(0.5)), false);
+    }
+    h.recalcLocalAabb();
+    check_same_solid(&h, "hull", &config);
+    check_same_solid(&h, "hull again", &config);
+    ck_assert_int_eq(config.hull_count(), 1);
+    h.setLocalScaling(btVector3(1, 3, 1));
+    h.setMargin(btScalar(0.1));
+    check_same_solid(&h, "scaled hull, margin 0.1", &config);
+    ck_assert_int_eq(config.hull_count(), 1);
+    mkb::ShapeMap before, after;
+    MK_ASSERT_STATUS(config.map_shape(&h, &before), MK_OK);
+    h.addPoint(btVector3(5, 0, 0));
+    MK_ASSERT_STATUS(config.map_shape(&h, &after), MK_OK);
+    ck_assert(before.shape.u.hull != after.shape.u.hull);  // rebuilt, the old one kept alive
+    check_same_solid(&h, "hull with a new point", &config);
+    btConvexHullShape flat;
+    flat.addPoint(btVector3(0, 0, 0));
+    flat.addPoint(btVector3(1, 0, 0));
+    flat.addPoint(btVector3(0, 1, 0));
+    MK_ASSERT_STATUS(config.map_shape(&flat, &after), MK_ERR_DEGENERATE);
+    btDefaultCollisionConfiguration native;
+    btSphereShape ball(btScalar(0.5));
+    bool used_minko = true;
+    btTransform xa(btQuaternion::getIdentity(), btVector3(0, 0, 0)), xb(btQuaternion::getIdentity(), btVector3(0, btScalar(0.4), 0));
+    collide_once(&config, &flat, xa, &ball, xb, &used_minko);
+    ck_assert(!used_minko);  // the degenerate hull's pairs run on Bullet
+}
+END_TEST
+
 // The exact signed distance and normal of two Bullet convex shapes, by the
 // long double brute-force oracle on the mapped shapes (the mapping itself is
 // checked against Bullet's support functions by the shape tests).
+// An oracle shape and pose for a Bullet shape: hulls straight from Bullet's
+// scaled points and margin (not through Minko's quickhull), the others from
+// the checked mapping.
+bool oracle_of(const btCollisionShape *s, const btTransform &x, mk_oracle_shape *o, mk_oracle_pose *pose)
+{
+    mkb::ShapeMap m;
+    m.axis = mk_quat_identity();
+    if (s->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE) {
+        const btConvexHullShape *h = static_cast<const btConvexHullShape *>(s);
+        std::vector<mk_lvec3> pts;
+        for (int i = 0; i < h->getNumPoints(); i++) {
+            btVector3 p = h->getScaledPoint(i);
+            pts.push_back(mk_lvec3{(long double)p.x(), (long double)p.y(), (long double)p.z()});
+        }
+        if (mk_oracle_shape_points(o, pts.data(), (int)pts.size(), (long double)h->getMargin()) != 0) return false;
+    } else if (mkb::map_primitive(s, &m) != MK_OK || mk_oracle_shape_init(o, &m.shape) != 0) {
+        return false;
+    }
+    *pose = mk_oracle_pose_of(mkb::minko_pose(x, m));
+    return true;
+}
+
 bool oracle_reference(const btCollisionShape *a, const btTransform &xa, const btCollisionShape *b, const btTransform &xb,
                       PointOut *out)
 {
-    mkb::ShapeMap ma, mb;
-    if (mkb::map_primitive(a, &ma) != MK_OK || mkb::map_primitive(b, &mb) != MK_OK) return false;
-    mk_oracle_result r;
-    if (mk_oracle_distance(&ma.shape, mkb::minko_pose(xa, ma), &mb.shape, mkb::minko_pose(xb, mb), &r) != 0 ||
-        !r.normal_defined)
+    mk_oracle_shape oa, ob;
+    mk_oracle_pose pa, pb;
+    if (!oracle_of(a, xa, &oa, &pa)) return false;
+    if (!oracle_of(b, xb, &ob, &pb)) {
+        mk_oracle_shape_free(&oa);
         return false;
+    }
+    mk_oracle_result r;
+    const bool ok = mk_oracle_query(&oa, &pa, &ob, &pb, 0, &r) == 0 && r.normal_defined;
+    mk_oracle_shape_free(&oa);
+    mk_oracle_shape_free(&ob);
+    if (!ok) return false;
     out->normal_on_b = -btVector3((btScalar)r.normal.x, (btScalar)r.normal.y, (btScalar)r.normal.z);
     out->distance = (double)r.distance;
     return true;
@@ -855,6 +923,15 @@ START_TEST(np_conventions_match_bullet)
     btCapsuleShape capsule(btScalar(0.3), btScalar(0.8));
     btCapsuleShapeZ capsule_z(btScalar(0.25), btScalar(0.5));
     btStaticPlaneShape plane(btVector3(0, 1, 0), btScalar(0.2));
+    btConvexHullShape hull;
+    mk_rng cloud = {4242};
+    for (int i = 0; i < 24; i++) {
+        mk_vec3 p = mk_rng_dir(&cloud);
+        hull.addPoint(btVector3((btScalar)(0.7 * p.x), (btScalar)(0.4 * p.y), (btScalar)(0.5 * p.z)), false);
+    }
+    hull.recalcLocalAabb();
+    btConvexHullShape sharp_hull(&hull.getPoints()[0].getX(), hull.getNumPoints(), sizeof(btVector3));
+    sharp_hull.setMargin(0);  // the sharp core: Minko's polytope path without rounding
     struct Case {
         const char *name;
         btCollisionShape *a, *b;
@@ -867,6 +944,10 @@ START_TEST(np_conventions_match_bullet)
         {"capsule-box", &capsule_z, &box, false, true},        {"sphere-plane", &sphere, &plane, true, true},
         {"plane-box", &plane, &box, true, true},               {"capsule-plane", &capsule, &plane, true, true},
         {"box-box", &box, &box, false, false},  // btBoxBoxDetector is dBoxBox: not exact (5 % face preference)
+        {"hull-plane", &hull, &plane, false, false},       {"sphere-hull", &sphere, &hull, false, false},
+        {"hull-box", &hull, &box, false, false},           {"hull-hull", &hull, &hull, false, false},
+        {"sharp hull-box", &sharp_hull, &box, false, false}, {"sharp hull-hull", &sharp_hull, &sharp_hull, false, false},
+        {"sharp hull-plane", &sharp_hull, &plane, false, false},
     };
     mk_rng rng = {777};
     int compared = 0;
@@ -985,6 +1066,39 @@ START_TEST(np_world_rests_on_minko_contacts)
 }
 END_TEST
 
+// A shape resized while its pair lives is seen at once, as Bullet's own
+// algorithms read the shape every step: a ball resting on a box ground rides
+// up when the ground box is made twice as tall.
+START_TEST(np_shape_changes_seen)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld world(&dispatcher, &bp, &solver, &config);
+    world.setGravity(btVector3(0, -10, 0));
+    btBoxShape slab(btVector3(5, btScalar(0.5), 5));
+    btSphereShape ball(btScalar(0.25));
+    btRigidBody ground(0, nullptr, &slab);
+    btVector3 inertia;
+    ball.calculateLocalInertia(1, inertia);
+    btRigidBody b(1, nullptr, &ball, inertia);
+    b.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 1, 0)));
+    b.setActivationState(DISABLE_DEACTIVATION);
+    world.addRigidBody(&ground);
+    world.addRigidBody(&b);
+    for (int i = 0; i < 90; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    MK_ASSERT_NEAR(b.getWorldTransform().getOrigin().y(), 0.75, 5e-3);
+    slab.setLocalScaling(btVector3(1, 2, 1));  // top face now at y = 1
+    world.updateSingleAabb(&ground);
+    for (int i = 0; i < 90; i++) world.stepSimulation(btScalar(1) / 60, 0);
+    MK_ASSERT_NEAR(b.getWorldTransform().getOrigin().y(), 1.25, 5e-3);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), 1);  // the same pair algorithm all along
+    world.removeRigidBody(&b);
+    world.removeRigidBody(&ground);
+}
+END_TEST
+
 // A running world switches its narrowphase both ways; pairs get new
 // algorithms and the simulation goes on undisturbed.
 START_TEST(np_switch_at_run_time)
@@ -1025,6 +1139,137 @@ START_TEST(np_switch_at_run_time)
 }
 END_TEST
 
+// ---- continuous collision -----------------------------------------------------
+
+// One world of a given kind with gravity off; bodies owned by the caller.
+struct CcdRig {
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher{&config};
+    btDbvtBroadphase bp;
+    btSequentialImpulseConstraintSolver solver;
+    btDiscreteDynamicsWorld *world;
+    explicit CcdRig(bool minko)
+    {
+        if (minko) world = new mkb::CcdWorld(&dispatcher, &bp, &solver, &config);
+        else world = new btDiscreteDynamicsWorld(&dispatcher, &bp, &solver, &config);
+        world->setGravity(btVector3(0, 0, 0));
+    }
+    ~CcdRig() { delete world; }
+};
+
+// A 0.05 sphere fired at 300 m/s (5 m per step) at a 0.1-thick wall: without
+// CCD it passes; Bullet's CCD and Minko's both stop it on the near side, and
+// Minko's stops it with a speculative contact at the time of impact or by
+// clamping its motion there.
+START_TEST(ccd_sphere_does_not_tunnel)
+{
+    btBoxShape wall(btVector3(btScalar(0.05), 2, 2));
+    btSphereShape ball(btScalar(0.05));
+    for (int mode = 0; mode < 3; mode++) {  // 0: no CCD, 1: Bullet's, 2: Minko's
+        CcdRig rig(mode == 2);
+        btRigidBody w(0, nullptr, &wall);
+        btVector3 inertia;
+        ball.calculateLocalInertia(btScalar(0.1), inertia);
+        btRigidBody b(btScalar(0.1), nullptr, &ball, inertia);
+        b.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(-7.3), 0, 0)));
+        b.setLinearVelocity(btVector3(300, 0, 0));
+        b.setActivationState(DISABLE_DEACTIVATION);
+        if (mode) {
+            b.setCcdMotionThreshold(btScalar(0.05));
+            b.setCcdSweptSphereRadius(btScalar(0.04));
+        }
+        rig.world->addRigidBody(&w);
+        rig.world->addRigidBody(&b);
+        double first_stop = 0;
+        for (int i = 0; i < 20; i++) {
+            rig.world->stepSimulation(btScalar(1) / 60, 0);
+            if (!first_stop && b.getLinearVelocity().x() < 100) first_stop = b.getWorldTransform().getOrigin().x();
+        }
+        const double x = b.getWorldTransform().getOrigin().x();
+        if (mode == 0) ck_assert_msg(x > 0.1, "no CCD: the sphere should pass (x = %g)", x);
+        else ck_assert_msg(x < 0, "CCD mode %d: the sphere passed the wall (x = %g)", mode, x);
+        if (mode == 2) {
+            mkb::CcdWorld *cw = static_cast<mkb::CcdWorld *>(rig.world);
+            ck_assert_int_gt(cw->ccd_stats().clamped + cw->ccd_stats().predictive, 0);
+            ck_assert_int_eq(cw->ccd_stats().native_fallbacks, 0);
+        }
+        rig.world->removeRigidBody(&b);
+        rig.world->removeRigidBody(&w);
+    }
+}
+END_TEST
+
+// A rod 2 long spinning at 100 rad/s (tips at 100 m/s, 95 degrees a step)
+// next to a thin plate its tips sweep through. Its centre does not move, so
+// Bullet never runs CCD for it and the rod spins through the plate; Minko's
+// rule measures the tips' motion and its time of impact follows the turn, so
+// the rod stops at the plate.
+START_TEST(ccd_spinning_rod)
+{
+    btBoxShape rod(btVector3(1, btScalar(0.02), btScalar(0.02)));
+    btBoxShape plate(btVector3(btScalar(0.02), btScalar(0.15), btScalar(0.5)));
+    for (int minko = 0; minko < 2; minko++) {
+        CcdRig rig(minko != 0);
+        btRigidBody p(0, nullptr, &plate);
+        p.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.8), btScalar(0.3), 0)));
+        btVector3 inertia;
+        rod.calculateLocalInertia(1, inertia);
+        btRigidBody r(1, nullptr, &rod, inertia);
+        r.setAngularVelocity(btVector3(0, 0, 100));
+        r.setActivationState(DISABLE_DEACTIVATION);
+        r.setCcdMotionThreshold(btScalar(0.01));
+        r.setCcdSweptSphereRadius(btScalar(0.01));
+        rig.world->addRigidBody(&p);
+        rig.world->addRigidBody(&r);
+        // How far the rod's long axis turns about z (unwrapped), whatever it
+        // does about its own axis after a one-point hit.
+        double turned = 0;
+        for (int i = 0; i < 30; i++) {
+            btVector3 a0 = r.getWorldTransform().getBasis().getColumn(0);
+            rig.world->stepSimulation(btScalar(1) / 60, 0);
+            btVector3 a1 = r.getWorldTransform().getBasis().getColumn(0);
+            double d = std::atan2((double)a1.y(), (double)a1.x()) - std::atan2((double)a0.y(), (double)a0.x());
+            while (d > SIMD_PI) d -= 2 * SIMD_PI;
+            while (d < -SIMD_PI) d += 2 * SIMD_PI;
+            turned += d;
+        }
+        if (minko) ck_assert_msg(turned < 0.6, "Minko: the rod turned %g rad, through the plate", turned);
+        else ck_assert_msg(turned > 2 * SIMD_PI, "Bullet: expected the rod to spin through (turned %g)", turned);
+        rig.world->removeRigidBody(&r);
+        rig.world->removeRigidBody(&p);
+    }
+}
+END_TEST
+
+// A sweep that meets a triangle mesh is Bullet's own (Minko does not model
+// meshes), and it still stops the sphere.
+START_TEST(ccd_mesh_falls_back_to_bullet)
+{
+    btTriangleMesh tris;
+    tris.addTriangle(btVector3(-5, 0, -5), btVector3(5, 0, -5), btVector3(-5, 0, 5));
+    tris.addTriangle(btVector3(5, 0, -5), btVector3(5, 0, 5), btVector3(-5, 0, 5));
+    btBvhTriangleMeshShape mesh(&tris, true);
+    btSphereShape ball(btScalar(0.1));
+    CcdRig rig(true);
+    btRigidBody m(0, nullptr, &mesh);
+    btVector3 inertia;
+    ball.calculateLocalInertia(1, inertia);
+    btRigidBody b(1, nullptr, &ball, inertia);
+    b.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 3, 0)));
+    b.setLinearVelocity(btVector3(0, -200, 0));
+    b.setActivationState(DISABLE_DEACTIVATION);
+    b.setCcdMotionThreshold(btScalar(0.1));
+    b.setCcdSweptSphereRadius(btScalar(0.08));
+    rig.world->addRigidBody(&m);
+    rig.world->addRigidBody(&b);
+    for (int i = 0; i < 10; i++) rig.world->stepSimulation(btScalar(1) / 60, 0);
+    ck_assert(b.getWorldTransform().getOrigin().y() > -0.05);
+    ck_assert_int_gt(static_cast<mkb::CcdWorld *>(rig.world)->ccd_stats().native_fallbacks, 0);
+    rig.world->removeRigidBody(&b);
+    rig.world->removeRigidBody(&m);
+}
+END_TEST
+
 Suite *suite()
 {
     Suite *s = suite_create("minko_bullet");
@@ -1053,10 +1298,18 @@ Suite *suite()
     suite_add_tcase(s, b);
     TCase *n = tcase_create("narrowphase");
     tcase_set_timeout(n, 60);
+    tcase_add_test(n, shape_hull_cache);
     tcase_add_test(n, np_conventions_match_bullet);
     tcase_add_test(n, np_world_rests_on_minko_contacts);
+    tcase_add_test(n, np_shape_changes_seen);
     tcase_add_test(n, np_switch_at_run_time);
     suite_add_tcase(s, n);
+    TCase *c = tcase_create("ccd");
+    tcase_set_timeout(c, 60);
+    tcase_add_test(c, ccd_sphere_does_not_tunnel);
+    tcase_add_test(c, ccd_spinning_rod);
+    tcase_add_test(c, ccd_mesh_falls_back_to_bullet);
+    suite_add_tcase(s, c);
     return s;
 }
 
