@@ -150,11 +150,15 @@ static int init_tetrahedron(epa_poly *P, const mk_cso_vertex *t)
     return ok && link_all(P, 0, 4);
 }
 
+/* A plain minimum over every slot: removed faces carry dist = +inf (see
+ * expand), so the loop has no live test and keeps the best in a register
+ * instead of reloading it through the index it just picked. */
 static int nearest_face(const epa_poly *P)
 {
-    int f, best = -1;
-    for (f = 0; f < P->nf; ++f)
-        if (P->f[f].live && (best < 0 || P->f[f].dist < P->f[best].dist)) best = f;
+    int f, best = 0;
+    mk_real bd = P->f[0].dist;
+    for (f = 1; f < P->nf; ++f)
+        if (P->f[f].dist < bd) bd = P->f[f].dist, best = f;
     return best;
 }
 
@@ -205,7 +209,10 @@ static int expand(epa_poly *P, int f0, int wi)
         }
     }
     if (nh < 3) return 0;
-    for (k = 0; k < nr; ++k) P->free_faces[P->nfree++] = removed[k];
+    for (k = 0; k < nr; ++k) {
+        P->f[removed[k]].dist = (mk_real)HUGE_VAL; /* out of nearest_face's way until reused */
+        P->free_faces[P->nfree++] = removed[k];
+    }
     for (k = 0; k < nh; ++k) {
         int f = face_alloc(P);
         if (f < 0 || !face_set(P, f, hz_a[k], hz_b[k], wi)) return 0;
@@ -235,9 +242,8 @@ static void face_weights(const epa_poly *P, const epa_face *F, mk_real *l)
     for (k = 0; k < 3; ++k) l[k] = sum > 0 ? l[k] / sum : MK_REAL(1.0) / 3;
 }
 
-static void answer(const epa_poly *P, int f, mk_epa_result *out)
+static void answer(const epa_poly *P, const epa_face *F, mk_epa_result *out)
 {
-    const epa_face *F = &P->f[f];
     int k;
     for (k = 0; k < 3; ++k) out->face[k] = P->v[F->v[k]];
     face_weights(P, F, out->l);
@@ -266,6 +272,7 @@ static int flat_answer(const mk_pair *p, const mk_simplex *s, mk_epa_result *out
 int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
 {
     epa_poly P;
+    epa_face best;
     mk_cso_vertex t[4];
     int it;
     P.p = p;
@@ -274,13 +281,12 @@ int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *
     out->state = MK_SOLVE_MAX_ITERATIONS;
     for (it = 0;; ++it) {
         int f = nearest_face(&P);
-        const epa_face *F = &P.f[f];
         mk_cso_vertex w;
-        answer(&P, f, out);
+        best = P.f[f]; /* expand may reuse f's slot before it finds a defect */
         out->iterations = it + 1;
         if (P.nv == MK_EPA_MAX_VERTICES) break;
-        w = mk_pair_support(p, F->n, P.v[F->v[0]].ia, P.v[F->v[0]].ib);
-        if (known_vertex(&P, &w) || mk_v3_dot(F->n, w.w) - F->dist <= MK_GJK_REL_TOL * F->dist + P.tol) {
+        w = mk_pair_support(p, best.n, P.v[best.v[0]].ia, P.v[best.v[0]].ib);
+        if (known_vertex(&P, &w) || mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol) {
             out->state = MK_SOLVE_CONVERGED;
             break;
         }
@@ -290,5 +296,6 @@ int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *
             break;
         }
     }
+    answer(&P, &best, out);
     return 0;
 }

@@ -181,19 +181,25 @@ static void check_hull(const mk_hull *h, const mk_vec3 *pts, int n, int coplanar
     ck_assert_int_eq(total, h->edge_count); /* every half-edge in exactly one loop */
 
     /* Vertex fans: vertex_edge leaves its vertex and the fan closes over all its
-     * edges; a vertex touches at least three faces (no redundant vertices). */
+     * edges; a vertex touches at least three faces (no redundant vertices).
+     * The adjacency lists (what the support walk reads) are the fans' far
+     * ends, in fan order, back to back. */
+    CHECK(h->adjacency[0] == h->vertex_count + 1);
     for (v = 0; v < h->vertex_count; ++v) {
         int e0 = h->vertex_edge[v], k = 0;
         CHECK(h->edges[e0].origin == v);
+        CHECK(h->adjacency[v + 1] - h->adjacency[v] == deg[v]);
         e = e0;
         do {
             CHECK(h->edges[e].origin == v);
+            CHECK(h->adjacency[h->adjacency[v] + k] == h->edges[h->edges[e].twin].origin);
             e = h->edges[h->edges[e].twin].next;
             ++k;
         } while (e != e0 && k <= h->edge_count);
         CHECK(k == deg[v]);
         CHECK(k >= 3);
     }
+    CHECK(h->adjacency[h->vertex_count] == h->vertex_count + 1 + h->edge_count);
 
     /* Every input point is inside every face plane. */
     for (f = 0; f < h->face_count; ++f)

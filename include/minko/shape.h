@@ -56,6 +56,7 @@ typedef struct mk_hull {
     const uint16_t *face_edge; /* one half-edge of each face */
     const mk_plane *planes;    /* outward unit normal and offset of each face */
     const uint16_t *vertex_edge; /* one half-edge leaving each vertex */
+    const uint16_t *adjacency; /* vertex v's neighbours: adjacency[adjacency[v] .. adjacency[v + 1]) */
     mk_vec3 centroid;          /* centroid of the solid */
     mk_real inner_radius;      /* distance from centroid to the nearest face plane */
     mk_real outer_radius;      /* distance from centroid to the farthest vertex */
