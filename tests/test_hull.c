@@ -200,6 +200,13 @@ static void check_hull(const mk_hull *h, const mk_vec3 *pts, int n, int coplanar
         CHECK(k >= 3);
     }
     CHECK(h->adjacency[h->vertex_count] == h->vertex_count + 1 + h->edge_count);
+    for (i = 0; i < 6; ++i) { /* the axis-extreme vertices after the lists */
+        mk_real s = i & 1 ? -1 : 1;
+        mk_vec3 d = mk_v3(i / 2 == 0 ? s : 0, i / 2 == 1 ? s : 0, i / 2 == 2 ? s : 0);
+        int x = h->adjacency[h->adjacency[h->vertex_count] + i];
+        CHECK(x >= 0 && x < h->vertex_count);
+        for (v = 0; v < h->vertex_count; ++v) CHECK(mk_v3_dot(d, h->vertices[v]) <= mk_v3_dot(d, h->vertices[x]));
+    }
 
     /* Every input point is inside every face plane. */
     for (f = 0; f < h->face_count; ++f)

@@ -235,6 +235,10 @@ START_TEST(box_view_matches_manifold_numbering)
             ck_assert(d == 1 || d == 2 || d == 4);
         }
     }
+    for (v = 0; v < 6; ++v) { /* corner v's axis-extreme entry has the sign of that direction */
+        int x = bh.hull.adjacency[bh.hull.adjacency[8] + v];
+        ck_assert_int_eq((x >> (v / 2)) & 1, !(v & 1));
+    }
 }
 END_TEST
 
