@@ -25,7 +25,7 @@
 // JSON Lines per ../shared/BENCH_FORMAT.md (suite "toi") with --json FILE, and a
 // table on stdout.
 //
-//   bench_toi [--quick] [--json FILE] [--cases N] [--seed S] [--family NAME] [--backend PREFIX]
+//   bench_toi [--quick] [--json FILE] [--cases N] [--seed S] [--family NAME] [--backend NAME|PREFIX]
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/NarrowPhaseCollision/btContinuousConvexCollision.h>
@@ -629,6 +629,15 @@ std::string compare_with_bullet(const std::vector<Row> &rows, const std::string 
     return buf;
 }
 
+// --backend NAME: that backend alone when one is called exactly so (for
+// callgrind runs of one setting), else every backend whose name starts so.
+bool backend_selected(const std::string &name, const char *filter, const std::vector<std::unique_ptr<Backend>> &backends)
+{
+    for (const auto &be : backends)
+        if (be->name == filter) return name == filter;
+    return name.compare(0, std::strlen(filter), filter) == 0;
+}
+
 } // namespace
 
 int main(int argc, char **argv)
@@ -646,7 +655,7 @@ int main(int argc, char **argv)
         else if (!std::strcmp(argv[i], "--family") && i + 1 < argc) only_family = argv[++i];
         else if (!std::strcmp(argv[i], "--backend") && i + 1 < argc) only_backend = argv[++i];
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--cases N] [--seed S] [--family NAME] [--backend PREFIX]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--cases N] [--seed S] [--family NAME] [--backend NAME|PREFIX]\n", argv[0]);
             return 2;
         }
     }
@@ -694,7 +703,7 @@ int main(int argc, char **argv)
         std::vector<Row> rows;
         for (auto &be : backends) {
             if (be->linear_only && f.rotating) continue;
-            if (only_backend && be->name.compare(0, std::strlen(only_backend), only_backend)) continue;
+            if (only_backend && !backend_selected(be->name, only_backend, backends)) continue;
             Row r = measure(f, *be, loops);
             print_row(r);
             if (jf) json_row(jf, r);
