@@ -682,7 +682,7 @@ int main(int argc, char **argv)
 
     std::vector<std::unique_ptr<Backend>> backends;
     // Tolerances relative to the pair's size; 0 is Minko's default, the rounding floor.
-    const double tols[] = {1e-2, 1e-3, 1e-4, 1e-6, 1e-9, 0};
+    const double tols[] = {1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-9, 0};
     for (double t : tols) backends.emplace_back(new MinkoBackend(t, false));
     for (double t : tols) backends.emplace_back(new MinkoBackend(t, true));
     backends.emplace_back(new BulletBackend(false));
