@@ -315,10 +315,13 @@ typedef struct side_plane { mk_vec3 n; mk_real d, slop; mk_feature id; } side_pl
  * little outside the reference face, which no solver notices. Only when the
  * clip direction is the face's own normal, though: along an axis tilted
  * against the face, a point outside it would be measured deeper than any
- * real point, and the deepest depth must stay exact. */
+ * real point, and the deepest depth must stay exact. Nor when rounded cores
+ * are apart: a vertex beside the face is then farther from it than its
+ * height over the plane, and rounded shapes resting apart by their radii
+ * (Bullet's margins) must get exact depths. */
 #define MK_MF_CLIP_SLOP MK_REAL(0.005)
 
-static int side_planes(const mk_feat *ref, mk_vec3 n, side_plane *sp)
+static int side_planes(const mk_feat *ref, mk_vec3 n, int slop, side_plane *sp)
 {
     int i, count;
     mk_vec3 c = mk_v3_zero();
@@ -351,7 +354,7 @@ static int side_planes(const mk_feat *ref, mk_vec3 n, side_plane *sp)
         count = ref->count;
     }
     for (i = 0; i < count; ++i)
-        sp[i].slop = count == 2 || mk_fabs_(mk_v3_dot(n, ref->normal)) >= 1 - 64 * MK_REAL_EPSILON ? MK_MF_CLIP_SLOP * size : 0;
+        sp[i].slop = slop && (count == 2 || mk_fabs_(mk_v3_dot(n, ref->normal)) >= 1 - 64 * MK_REAL_EPSILON) ? MK_MF_CLIP_SLOP * size : 0;
     return count;
 }
 
@@ -483,7 +486,7 @@ void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, 
 {
     side_plane sp[MK_FEAT_MAX];
     clip_vert out[MK_MF_MAX];
-    int nsp = side_planes(ref, m->normal, sp), n, i;
+    int nsp = side_planes(ref, m->normal, !(m->cores_apart && ra + rb > 0), sp), n, i;
     mk_real inv_cos = ref->count > 2 ? 1 / mk_v3_dot(m->normal, ref->normal) : 0;
     if (inc->count == 1) {
         for (i = 0; i < nsp; ++i)
@@ -544,6 +547,7 @@ void mk_mf_from_closest(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk
     mk_real ra = a->radius, rb = b->radius, cos_tol = mk_sqrt_(1 - MK_MF_SIN_TOL * MK_MF_SIN_TOL);
     int a_ok, b_ok, keep;
     m->count = 0;
+    m->cores_apart = dist > 0;
     mk_support_feature(a, n, &fa);
     mk_support_feature(b, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &fb);
     mk_feat_transform(&fb, p);

@@ -263,6 +263,36 @@ static mk_feature polytope_edge(const mk_shape *s, int e, mk_vec3 *e0, mk_vec3 *
     }
 }
 
+/* Cores apart (rounded or speculative polytopes): SAT's separation is only a
+ * lower bound of their distance, reached when the points built along the
+ * axis realise it (a face over a face, two edges crossing inside both). If
+ * they fall short of it (two cube edges side by side: the face axes
+ * separate by less than the edges are apart, and the faces' clip is empty),
+ * the exact core distance comes from GJK instead. */
+#ifndef MK_WITHOUT_GJK
+static mk_real polytope_size(const mk_shape *s)
+{
+    return s->radius + (s->type == MK_SHAPE_BOX ? mk_v3_max_abs(s->u.half_extents) : s->u.hull->outer_radius);
+}
+
+static int realised(const mk_mf *m, mk_real depth, const mk_pair *p)
+{
+    mk_real tol = 256 * MK_REAL_EPSILON * (mk_v3_max_abs(p->t) + polytope_size(p->a) + polytope_size(p->b));
+    int i;
+    for (i = 0; i < m->count; ++i)
+        if (m->p[i].depth >= depth - tol) return 1;
+    return 0;
+}
+
+static mk_status generic(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache);
+
+static mk_status apart(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
+{
+    m->count = 0;
+    return generic(p, m, cache);
+}
+#endif
+
 /* Two polytopes (boxes, hulls): SAT (src/sat.h; the 15-axis closed form for
  * two boxes), then a face axis clips the incident face against the
  * reference face and an edge axis gives the closest points of the two
@@ -299,6 +329,7 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     if (cache) cache->axis = sat.best - ra - rb > m->margin ? MK_SAT_NONE : (int)sat.kind;
     if (sat.best - ra - rb > m->margin) return MK_OK;
     m->normal = sat.normal;
+    m->cores_apart = sat.separation > 0;
     if (sat.kind == MK_SAT_FACE_A) {
         polytope_face(a, sat.a, &ref);
         mk_support_feature(b, mk_mat3_tmul_v3(p->r, mk_v3_neg(sat.normal)), &inc);
@@ -310,14 +341,20 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
         mk_support_feature(a, sat.normal, &inc);
         mk_mf_clip(m, &ref, 0, &inc, ra, rb);
     } else {
-        mk_vec3 a0, a1, b0, b1;
-        mk_real s, t;
+        mk_vec3 a0, a1, b0, b1, qa;
+        mk_real s, t, gap = sat.separation;
         mk_feature fa = polytope_edge(a, sat.a, &a0, &a1), fb = polytope_edge(b, sat.b, &b0, &b1);
         b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
         b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
         mk_segment_segment(a0, a1, b0, b1, &s, &t);
-        mk_mf_add(m, mk_v3_mad(mk_v3_lerp(a0, a1, s), ra, sat.normal), ra + rb - sat.separation, fa, fb);
+        qa = mk_v3_lerp(a0, a1, s);
+        /* Apart, the edges' closest points are a gap only if neither end clamped. */
+        if (gap > 0) gap = mk_v3_dist(qa, mk_v3_lerp(b0, b1, t));
+        mk_mf_add(m, mk_v3_mad(qa, ra, sat.normal), ra + rb - gap, fa, fb);
     }
+#ifndef MK_WITHOUT_GJK
+    if (sat.separation > 0 && !realised(m, ra + rb - sat.separation, p)) return apart(p, m, cache);
+#endif
     return MK_OK;
 }
 
@@ -430,6 +467,7 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     p = mk_pair_make(a, xa, b, xb);
     m.count = 0;
     m.margin = margin;
+    m.cores_apart = 0;
     m.normal = mk_v3(0, 0, 1);
     if ((st = fn(&p, &m, cache)) != MK_OK) return st;
     mk_mf_reduce(&m);

@@ -26,7 +26,11 @@
  * untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing allocates;
  * every query runs in A's local frame. Methods: closed forms for sphere,
  * capsule and box-capsule pairs and for anything against a plane; SAT
- * (src/sat.h) with reference/incident face clipping for box and hull pairs;
+ * (src/sat.h) with reference/incident face clipping for box and hull pairs,
+ * exact for rounded ones too: when their cores are apart, SAT's separation
+ * is only a lower bound of the core distance, so unless the clipped points
+ * realise it GJK gives the exact distance (two rounded cubes edge to edge;
+ * a build without GJK keeps the bound);
  * the exact GJK/EPA normal and closest points for the rest (cylinders,
  * cones, spheres and capsules against hulls), whose support faces are then
  * clipped. A build without SAT (MK_WITHOUT) takes GJK/EPA for box and hull
