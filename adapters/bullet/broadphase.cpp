@@ -18,6 +18,66 @@ struct Broadphase::Proxy : public btBroadphaseProxy {
 
 namespace {
 
+// Bullet's btHashedOverlappingPairCache with the same deterministic dispatch
+// (pairs visited in (uid0, uid1) order, Bullet's loop as it is, removals
+// included) but ordered by a radix sort instead of a quicksort per step:
+// O(n) in four to eight byte passes instead of O(n log n) comparisons
+// through a predicate, which was a tenth of a settled pile's collision phase.
+// Keys are unique, so the order is exactly Bullet's. Memory: two arrays of
+// the pair count, grown by doubling, reused every step.
+class PairCache : public btHashedOverlappingPairCache {
+public:
+    using btHashedOverlappingPairCache::processAllOverlappingPairs;
+    void processAllOverlappingPairs(btOverlapCallback *callback, btDispatcher *dispatcher,
+                                    const btDispatcherInfo &info) override
+    {
+        if (!info.m_deterministicOverlappingPairs) {
+            btHashedOverlappingPairCache::processAllOverlappingPairs(callback, dispatcher, info);
+            return;
+        }
+        btBroadphasePairArray &pa = getOverlappingPairArray();
+        sort_by_uids(pa);
+        for (size_t i = 0; i < m_order.size();) {
+            btBroadphasePair *pair = &pa[m_order[i].index];
+            if (callback->processOverlap(*pair)) removeOverlappingPair(pair->m_pProxy0, pair->m_pProxy1, dispatcher);
+            else i++;
+        }
+    }
+
+private:
+    struct Entry {
+        unsigned long long key;  // uid0 + 1 above uid1 + 1: Bullet gives a missing proxy uid -1, first
+        int index;
+    };
+    static unsigned long long uid_key(const btBroadphaseProxy *p) { return (unsigned)((p ? p->m_uniqueId : -1) + 1); }
+
+    void sort_by_uids(const btBroadphasePairArray &pa)
+    {
+        const size_t n = (size_t)pa.size();
+        m_order.resize(n);
+        m_tmp.resize(n);
+        size_t count[8][256] = {};
+        for (size_t i = 0; i < n; i++) {
+            const unsigned long long k = uid_key(pa[(int)i].m_pProxy0) << 32 | uid_key(pa[(int)i].m_pProxy1);
+            m_order[i] = Entry{k, (int)i};
+            for (int d = 0; d < 8; d++) count[d][(k >> (8 * d)) & 255]++;
+        }
+        for (int d = 0; d < 8; d++) {
+            if (n == 0 || count[d][(m_order[0].key >> (8 * d)) & 255] == n) continue;  // one bucket: nothing moves
+            size_t at = 0;
+            for (size_t &c : count[d]) {
+                const size_t here = c;
+                c = at;
+                at += here;
+            }
+            for (const Entry &e : m_order) m_tmp[count[d][(e.key >> (8 * d)) & 255]++] = e;
+            m_order.swap(m_tmp);
+        }
+    }
+
+    std::vector<Entry> m_order, m_tmp;
+};
+
 mk_aabb to_aabb(const btVector3 &lo, const btVector3 &hi) { return mk_aabb_make(to_mk(lo), to_mk(hi)); }
 
 // Segment from + t (to - from), t in [0, 1], against [lo, hi]: closed slabs.
@@ -72,7 +132,7 @@ mk_real ray_visit(void *c, mk_bp_id, void *user, mk_real, mk_real max)
 Broadphase::Broadphase(mk_bp_kind kind, btHashedOverlappingPairCache *cache, int initial_capacity)
     : m_kind(kind), m_capacity(std::max(initial_capacity, 16)), m_cache(cache), m_own_cache(cache == nullptr)
 {
-    if (m_own_cache) m_cache = new (btAlignedAlloc(sizeof(btHashedOverlappingPairCache), 16)) btHashedOverlappingPairCache();
+    if (m_own_cache) m_cache = new (btAlignedAlloc(sizeof(PairCache), 16)) PairCache();
     note(rebuild(m_capacity));
 }
 

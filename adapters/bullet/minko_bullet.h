@@ -86,7 +86,9 @@ mk_transform minko_pose(const btTransform &world, const ShapeMap &map);
 class Broadphase : public btBroadphaseInterface {
 public:
     // `cache`: a pair cache to use (not owned, not deferred-removal), or
-    // nullptr for an owned btHashedOverlappingPairCache.
+    // nullptr for an owned btHashedOverlappingPairCache whose deterministic
+    // dispatch (m_deterministicOverlappingPairs) orders the pairs as Bullet
+    // does, by a radix sort instead of a quicksort per step.
     explicit Broadphase(mk_bp_kind kind = MK_BP_AUTO, btHashedOverlappingPairCache *cache = nullptr,
                         int initial_capacity = 1024);
     ~Broadphase() override;
