@@ -16,7 +16,10 @@
 // collision world's virtual updateAabbs / computeOverlappingPairs /
 // performDiscreteCollisionDetection; the referee and the counters run outside
 // the timed region. The backends of a scene run side by side, one step each
-// in turn, so load on a shared machine falls on all of them alike.
+// in turn, so load on a shared machine falls on all of them alike. With
+// --trials N every scene runs N times from slightly perturbed starts and each
+// figure is the median (tunnelling the worst): resting stacks creep in a
+// direction set by round-off, so one run says little about drift.
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
@@ -590,6 +593,7 @@ struct Result {
     int tunnelled = 0, referee_failures = 0;
     double divergence = -1;                              // max |p - p_native| at the end
     long minko_pairs = -1, native_pairs = -1;            // Minko narrowphase: algorithms on Minko / left to Bullet
+    int trials = 1;                                      // figures are medians over this many perturbed runs
     std::vector<btVector3> end_pos;
 };
 
@@ -704,8 +708,11 @@ double kinetic_energy(const std::vector<btRigidBody *> &bodies)
 // spike on a shared machine hits them all alike and their ratios hold.
 class Run {
 public:
-    Run(const SceneSpec &scene, const Backend &backend, int steps)
-        : m_scene(scene), m_pipe(backend), m_steps(steps),
+    // Trial 0 is the scene as specified; trial k > 0 moves every dynamic
+    // body's start by up to 1e-3 of its bounding radius per axis (seeded by
+    // k and the body, the same for every backend).
+    Run(const SceneSpec &scene, const Backend &backend, int steps, int trial)
+        : m_scene(scene), m_pipe(backend), m_steps(steps), m_trial(trial),
           m_drift_step(scene.drift_from < 0 ? -1 : (int)(scene.drift_from * steps))
     {
         m_res.backend = std::string(kBulletTag) + "." + backend.name;
@@ -790,6 +797,15 @@ private:
         if (bs.mass > 0) shape->calculateLocalInertia(bs.mass, inertia);
         btRigidBody::btRigidBodyConstructionInfo info(bs.mass, nullptr, shape, inertia);
         info.m_startWorldTransform = bs.xf;
+        if (m_trial > 0 && bs.mass > 0) {
+            Rng rng(0x5EED0000ull * (unsigned long long)m_trial + m_bodies.size());
+            btVector3 c;
+            btScalar r;
+            shape->getBoundingSphere(c, r);
+            const btScalar e = btScalar(1e-3) * r;
+            info.m_startWorldTransform.getOrigin() +=
+                btVector3((btScalar)rng.range(-e, e), (btScalar)rng.range(-e, e), (btScalar)rng.range(-e, e));
+        }
         info.m_friction = m_scene.friction;
         btRigidBody *body = new btRigidBody(info);
         if (bs.mass > 0) {
@@ -810,7 +826,7 @@ private:
 
     const SceneSpec &m_scene;
     Pipeline m_pipe;
-    const int m_steps, m_drift_step;
+    const int m_steps, m_trial, m_drift_step;
     Result m_res;
     std::vector<btRigidBody *> m_bodies;
     std::vector<btVector3> m_drift_ref;
@@ -818,6 +834,29 @@ private:
     Referee m_referee;
     double m_sum_pairs = 0, m_sum_manifolds = 0, m_sum_points = 0;
 };
+
+// Each figure's median over the trials, but tunnelled bodies the worst trial's
+// and referee failures summed (end positions: the first trial's).
+Result median_of(const std::vector<Result> &trials)
+{
+    Result r = trials[0];
+    auto med = [&trials](double Result::*f) {
+        std::vector<double> v;
+        for (const Result &t : trials) v.push_back(t.*f);
+        return median(v);
+    };
+    for (double Result::*f : {&Result::ms, &Result::collision_ms, &Result::broadphase_ms, &Result::ms_mean,
+                              &Result::collision_ms_mean, &Result::pairs, &Result::manifolds, &Result::points,
+                              &Result::max_penetration, &Result::drift, &Result::ke_end, &Result::divergence})
+        r.*f = med(f);
+    r.referee_failures = 0;
+    for (const Result &t : trials) {
+        r.tunnelled = std::max(r.tunnelled, t.tunnelled);
+        r.referee_failures += t.referee_failures;
+    }
+    r.trials = (int)trials.size();
+    return r;
+}
 
 // ---- output ---------------------------------------------------------------------
 
@@ -854,6 +893,7 @@ void write_json(FILE *f, const SceneSpec &s, const Result &r)
                  "\"tunnelled\":%d",
                  s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.steps, r.bodies, r.ms, r.collision_ms,
                  r.broadphase_ms, r.ms_mean, r.collision_ms_mean, r.pairs, r.manifolds, r.points, r.max_penetration, r.ke_end, r.tunnelled);
+    if (r.trials > 1) std::fprintf(f, ",\"trials\":%d", r.trials);
     if (r.drift >= 0) std::fprintf(f, ",\"drift\":%.6g", r.drift);
     if (r.divergence >= 0) std::fprintf(f, ",\"divergence_from_native\":%.6g", r.divergence);
     if (r.referee_failures) std::fprintf(f, ",\"failures\":%d", r.referee_failures);
@@ -872,6 +912,8 @@ void usage(const char *argv0)
                  "  --no-native  leave out the native reference (for profiling one backend)\n"
                  "  --no-referee no penetration referee (max_pen reads 0; for profiling)\n"
                  "  --steps N    override every scene's step count\n"
+                 "  --trials N   run each scene N times, starts perturbed by 1e-3 of each body's size\n"
+                 "               from the second on; every figure is the median over the trials\n"
                  "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n",
                  argv0);
 }
@@ -882,7 +924,7 @@ int main(int argc, char **argv)
 {
     bool quick = false, list = false, no_native = false;
     const char *json = nullptr;
-    int steps_override = 0;
+    int steps_override = 0, trials = 1;
     std::vector<std::string> only_scenes, only_backends;
     for (int i = 1; i < argc; i++) {
         std::string a = argv[i];
@@ -894,6 +936,7 @@ int main(int argc, char **argv)
         else if (a == "--scene" && i + 1 < argc) only_scenes.push_back(argv[++i]);
         else if (a == "--backend" && i + 1 < argc) only_backends.push_back(argv[++i]);
         else if (a == "--steps" && i + 1 < argc) steps_override = std::atoi(argv[++i]);
+        else if (a == "--trials" && i + 1 < argc) trials = std::max(1, std::atoi(argv[++i]));
         else if (a == "--bp" && i + 1 < argc) {
             std::string k = argv[++i];
             g_bp_kind = k == "sap" ? MK_BP_SAP : k == "hgrid" ? MK_BP_HGRID : k == "brute" ? MK_BP_BRUTE : MK_BP_AUTO;
@@ -938,21 +981,30 @@ int main(int argc, char **argv)
                 continue;
             picked.push_back(b);
         }
-        std::vector<Run *> runs;
-        for (int b : picked) runs.push_back(new Run(scene, kBackends[b], steps));
-        for (int step = 0; step < steps; step++)
-            for (size_t k = 0; k < runs.size(); k++) runs[(k + (size_t)step) % runs.size()]->step(step);
-        Result native;
-        for (size_t k = 0; k < runs.size(); k++) {
-            Result r = runs[k]->finish();
-            delete runs[k];
-            if (picked[k] == 0) {
-                native = r;
-            } else if (!no_native) {
-                r.divergence = 0;
-                for (size_t i = 0; i < r.end_pos.size(); i++)
-                    r.divergence = std::max(r.divergence, (double)(r.end_pos[i] - native.end_pos[i]).length());
+        // per_backend[k][t]: backend picked[k] in trial t.
+        std::vector<std::vector<Result>> per_backend(picked.size());
+        for (int t = 0; t < trials; t++) {
+            std::vector<Run *> runs;
+            for (int b : picked) runs.push_back(new Run(scene, kBackends[b], steps, t));
+            for (int step = 0; step < steps; step++)
+                for (size_t k = 0; k < runs.size(); k++) runs[(k + (size_t)step) % runs.size()]->step(step);
+            for (size_t k = 0; k < runs.size(); k++) {
+                per_backend[k].push_back(runs[k]->finish());
+                delete runs[k];
             }
+            if (picked[0] == 0)
+                for (size_t k = 1; k < runs.size(); k++) {
+                    Result &r = per_backend[k].back();
+                    const Result &native = per_backend[0].back();
+                    r.divergence = 0;
+                    for (size_t i = 0; i < r.end_pos.size(); i++)
+                        r.divergence = std::max(r.divergence, (double)(r.end_pos[i] - native.end_pos[i]).length());
+                }
+        }
+        Result native;
+        for (size_t k = 0; k < picked.size(); k++) {
+            Result r = median_of(per_backend[k]);
+            if (picked[k] == 0) native = r;
             print_row(scene, r, native);
             if (out) write_json(out, scene, r);
             std::fflush(stdout);

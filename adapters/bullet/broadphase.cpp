@@ -19,12 +19,15 @@ struct Broadphase::Proxy : public btBroadphaseProxy {
 namespace {
 
 // Bullet's btHashedOverlappingPairCache with the same deterministic dispatch
-// (pairs visited in (uid0, uid1) order, Bullet's loop as it is, removals
-// included) but ordered by a radix sort instead of a quicksort per step:
-// O(n) in four to eight byte passes instead of O(n log n) comparisons
-// through a predicate, which was a tenth of a settled pile's collision phase.
-// Keys are unique, so the order is exactly Bullet's. Memory: two arrays of
-// the pair count, grown by doubling, reused every step.
+// (pairs visited in descending (uid0, uid1) order, which is what Bullet's
+// quicksort with its ">" predicate gives, and Bullet's loop as it is,
+// removals included) without Bullet's quicksort of every pair every step:
+// the order of the last step is kept and reused while the pair array holds
+// the same pairs at the same places (a settled or sleeping scene: one O(n)
+// check), and otherwise rebuilt by a radix sort on keys packed to the uids'
+// width (O(n) per byte of key, three bytes up to 4096 proxies). Keys are
+// unique, so the order is exactly Bullet's. Memory: two arrays of the pair
+// count, grown by doubling, reused every step.
 class PairCache : public btHashedOverlappingPairCache {
 public:
     using btHashedOverlappingPairCache::processAllOverlappingPairs;
@@ -36,46 +39,67 @@ public:
             return;
         }
         btBroadphasePairArray &pa = getOverlappingPairArray();
-        sort_by_uids(pa);
-        for (size_t i = 0; i < m_order.size();) {
-            btBroadphasePair *pair = &pa[m_order[i].index];
-            if (callback->processOverlap(*pair)) removeOverlappingPair(pair->m_pProxy0, pair->m_pProxy1, dispatcher);
-            else i++;
+        if (!order_still_valid(pa)) sort_by_uids(pa);
+        // m_order is ascending: walk it from the end.
+        for (size_t i = m_order.size(); i > 0;) {
+            btBroadphasePair *pair = &pa[m_order[i - 1].index];
+            if (callback->processOverlap(*pair)) {
+                removeOverlappingPair(pair->m_pProxy0, pair->m_pProxy1, dispatcher);
+                m_order_valid = false;
+            } else {
+                i--;
+            }
         }
     }
 
 private:
     struct Entry {
-        unsigned long long key;  // uid0 + 1 above uid1 + 1: Bullet gives a missing proxy uid -1, first
+        unsigned u0, u1;  // uids (+ 1) of the pair at `index` when sorted
+        unsigned long long key;
         int index;
     };
-    static unsigned long long uid_key(const btBroadphaseProxy *p) { return (unsigned)((p ? p->m_uniqueId : -1) + 1); }
+    // Bullet orders a missing proxy (uid -1) last: uid + 1.
+    static unsigned uid_of(const btBroadphaseProxy *p) { return (unsigned)((p ? p->m_uniqueId : -1) + 1); }
+
+    bool order_still_valid(const btBroadphasePairArray &pa) const
+    {
+        if (!m_order_valid || (size_t)pa.size() != m_order.size()) return false;
+        for (const Entry &e : m_order)
+            if (uid_of(pa[e.index].m_pProxy0) != e.u0 || uid_of(pa[e.index].m_pProxy1) != e.u1) return false;
+        return true;
+    }
 
     void sort_by_uids(const btBroadphasePairArray &pa)
     {
         const size_t n = (size_t)pa.size();
         m_order.resize(n);
         m_tmp.resize(n);
-        size_t count[8][256] = {};
+        unsigned top = 0;
         for (size_t i = 0; i < n; i++) {
-            const unsigned long long k = uid_key(pa[(int)i].m_pProxy0) << 32 | uid_key(pa[(int)i].m_pProxy1);
-            m_order[i] = Entry{k, (int)i};
-            for (int d = 0; d < 8; d++) count[d][(k >> (8 * d)) & 255]++;
+            const btBroadphasePair &p = pa[(int)i];
+            m_order[i] = Entry{uid_of(p.m_pProxy0), uid_of(p.m_pProxy1), 0, (int)i};
+            top = std::max(top, std::max(m_order[i].u0, m_order[i].u1));
         }
-        for (int d = 0; d < 8; d++) {
-            if (n == 0 || count[d][(m_order[0].key >> (8 * d)) & 255] == n) continue;  // one bucket: nothing moves
+        int bits = 1;
+        while (bits < 32 && (top >> bits) != 0) bits++;
+        for (Entry &e : m_order) e.key = (unsigned long long)e.u0 << bits | e.u1;
+        for (int shift = 0; shift < 2 * bits; shift += 8) {
+            size_t count[256] = {};
+            for (const Entry &e : m_order) count[(e.key >> shift) & 255]++;
             size_t at = 0;
-            for (size_t &c : count[d]) {
+            for (size_t &c : count) {
                 const size_t here = c;
                 c = at;
                 at += here;
             }
-            for (const Entry &e : m_order) m_tmp[count[d][(e.key >> (8 * d)) & 255]++] = e;
+            for (const Entry &e : m_order) m_tmp[count[(e.key >> shift) & 255]++] = e;
             m_order.swap(m_tmp);
         }
+        m_order_valid = true;
     }
 
     std::vector<Entry> m_order, m_tmp;
+    bool m_order_valid = false;
 };
 
 mk_aabb to_aabb(const btVector3 &lo, const btVector3 &hi) { return mk_aabb_make(to_mk(lo), to_mk(hi)); }

@@ -519,9 +519,10 @@ START_TEST(bp_same_trajectories_as_bullet)
 END_TEST
 
 // The owned pair cache's deterministic dispatch visits every pair once, in
-// Bullet's (uid0, uid1) order, also after proxies were destroyed and new ones
-// (higher uids, reused Minko slots) created; without the flag it visits them
-// all too.
+// exactly the order Bullet's own btHashedOverlappingPairCache does for the
+// same pairs, also after proxies were destroyed and new ones (higher uids,
+// reused Minko slots) created, and twice in a row (the kept order); without
+// the flag it visits them all too.
 START_TEST(bp_deterministic_dispatch_order)
 {
     struct Recorder : btOverlapCallback {
@@ -549,18 +550,23 @@ START_TEST(bp_deterministic_dispatch_order)
         bp.calculateOverlappingPairs(&dispatcher);
         btOverlappingPairCache *cache = bp.getOverlappingPairCache();
         ck_assert_int_gt(cache->getNumOverlappingPairs(), 300);
+        btHashedOverlappingPairCache bullets;
+        for (int i = 0; i < cache->getNumOverlappingPairs(); i++)
+            bullets.addOverlappingPair(cache->getOverlappingPairArray()[i].m_pProxy0,
+                                       cache->getOverlappingPairArray()[i].m_pProxy1);
         btDispatcherInfo info;
-        Recorder ordered, plain;
+        Recorder ordered, again, reference, plain;
         info.m_deterministicOverlappingPairs = true;
         cache->processAllOverlappingPairs(&ordered, &dispatcher, info);
+        cache->processAllOverlappingPairs(&again, &dispatcher, info);
+        bullets.processAllOverlappingPairs(&reference, &dispatcher, info);
         info.m_deterministicOverlappingPairs = false;
         cache->processAllOverlappingPairs(&plain, &dispatcher, info);
         ck_assert_int_eq((int)ordered.seen.size(), cache->getNumOverlappingPairs());
-        for (size_t i = 0; i < ordered.seen.size(); i++) {
-            ck_assert_int_lt(ordered.seen[i].first, ordered.seen[i].second);
-            if (i > 0) ck_assert_msg(ordered.seen[i - 1] < ordered.seen[i], "pair %d out of order", (int)i);
-        }
+        ck_assert(ordered.seen == reference.seen);
+        ck_assert(again.seen == reference.seen);
         std::sort(plain.seen.begin(), plain.seen.end());
+        std::sort(ordered.seen.begin(), ordered.seen.end());
         ck_assert(plain.seen == ordered.seen);
         // Destroy every third proxy, add as many (new uids, reused slots).
         for (size_t i = 0; i < proxies.size(); i += 3) {
