@@ -285,10 +285,10 @@ namespace {
 // the usual resting contact of Bullet hulls. Probe: two unit-cube hulls
 // rounded by 0.04 whose cores are 0.05 apart along x and y, so their
 // nearest features are two parallel edges sqrt(0.05^2 + 0.05^2) apart and the
-// rounded solids overlap by 0.08 - that. Until mk_collide gets this right
-// (today it takes the SAT separation along a face axis as the core distance,
-// which overstates such depths by up to 0.015 on Bullet-sized hulls), hull
-// pairs stay on Bullet's own algorithms.
+// rounded solids overlap by 0.08 - that. A build whose mk_collide gets this
+// wrong (before 18c7092 it took the SAT separation along a face axis as the
+// core distance, overstating such depths by up to 0.015 on Bullet-sized
+// hulls) leaves rounded hull pairs on Bullet's own algorithms.
 bool rounded_polytopes_exact()
 {
     static const bool exact = [] {

@@ -1079,9 +1079,8 @@ bool gap_of(const btCollisionShape *a, const btTransform &xa, const btCollisionS
 // bounding radius) is exact for spheres and a sphere against a box, and
 // conservative for the rest, so at a gap of 0.9 times the manifold's contact
 // breaking threshold (placed by bisection on the exact distance, along
-// random directions) the algorithm reports exactly what mk_collide reports.
-// (mk_collide itself gives no point for some such poses, e.g. two boxes
-// corner to corner, whose faces' clip is empty.)
+// random directions) the algorithm reports as many points as mk_collide
+// itself, the deepest no farther apart than the gap.
 START_TEST(np_near_pairs_never_skipped)
 {
     mkb::CollisionConfiguration mine;
