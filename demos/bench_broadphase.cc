@@ -237,16 +237,15 @@ struct MinkoBackend : Backend {
     const char *name() const { return label; }
     bool setup(const Scene &s) {
         m = bb_minko_create(kind, s.n, s.frames[0].box.data(), s.is_static.data());
-        if (!m) return false;
-        Pairs tmp((size_t)s.n * 64);
-        return bb_minko_frame(m, s.frames[0].box.data(), nullptr, 0, nullptr, 0, tmp.data(), (long)tmp.size()) >= 0;
+        return m && bb_minko_frame(m, s.frames[0].box.data(), nullptr, 0, nullptr, 0) >= 0;
     }
+    // out keeps last frame's size: resizing it zero-fills only the growth,
+    // not a whole buffer every frame (that memset is no broadphase's work).
     bool frame(const Scene &, const Frame &f, Pairs &out) {
-        out.resize(out.capacity());
-        long np = bb_minko_frame(m, f.box.data(), f.moved.data(), (int)f.moved.size(), f.respawned.data(), (int)f.respawned.size(),
-                                 out.data(), (long)out.capacity());
+        long np = bb_minko_frame(m, f.box.data(), f.moved.data(), (int)f.moved.size(), f.respawned.data(), (int)f.respawned.size());
         if (np < 0) return false;
         out.resize((size_t)np);
+        bb_minko_pairs(m, out.data());
         return true;
     }
     long candidates() const { return bb_minko_candidates(m); }
