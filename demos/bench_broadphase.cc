@@ -10,8 +10,8 @@
 //
 //   bench_broadphase [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME] [--budget MS]
 // (--budget: time per backend and scene over all repetitions, default 12000;
-//  --skip NAME leaves one backend out, e.g. bullet.axis_sweep3_32 at n = 100k,
-//  whose proxy creation alone is quadratic: minutes per scene)
+//  --skip NAME[,NAME...] leaves backends out, e.g. bullet.axis_sweep3_32 at
+//  n = 100k, whose proxy creation alone is quadratic: minutes per scene)
 // (--backend runs one backend, for profiling with callgrind; no ratios then)
 //
 // Output: JSON Lines per ../shared/BENCH_FORMAT.md (suite "broad") and a table.
@@ -525,6 +525,15 @@ static double floor_ms(const Scene &s)
 
 struct Plan { std::string scene; int n, frames; };
 
+// Is name one of the comma-separated names in list?
+static bool listed(const char *list, const char *name)
+{
+    size_t len = std::strlen(name);
+    for (const char *p = list; p && *p; p = std::strchr(p, ',') ? std::strchr(p, ',') + 1 : nullptr)
+        if (!std::strncmp(p, name, len) && (p[len] == ',' || p[len] == '\0')) return true;
+    return false;
+}
+
 int main(int argc, char **argv)
 {
     bool quick = false;
@@ -575,7 +584,7 @@ int main(int argc, char **argv)
                 if (left[b] <= 0) continue;
                 if (only_backend || skip_backend) {
                     std::unique_ptr<Backend> probe(make_backend(b));
-                    if ((only_backend && std::strcmp(probe->name(), only_backend)) || (skip_backend && !std::strcmp(probe->name(), skip_backend))) {
+                    if ((only_backend && std::strcmp(probe->name(), only_backend)) || (skip_backend && listed(skip_backend, probe->name()))) {
                         res[b].backend = probe->name();
                         res[b].failed = true;
                         continue;

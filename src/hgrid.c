@@ -13,6 +13,8 @@
  * reported once however many cells the two share. Proxies with an infinite
  * side (planes, slabs) go to an oversized list and are candidates of every
  * proxy. A level stays in use until the next rebuild once it had a proxy.
+ * Statics that stay put are not in the cells at all but in a read-only
+ * static index (below), which dynamic proxies look up.
  *
  * Re-testing a candidate is skipped while it cannot have changed: each proxy
  * sums how far its faces have moved (travel), and a tested pair stores the
@@ -101,7 +103,7 @@ struct mk_hgrid {
     int32_t used_list[MK_LEVELS_]; int used_count; /* ascending */
     /* cells */
     mk_cell *cells; int cell_count, cell_cap;
-    uint32_t *index; uint32_t index_mask;
+    uint32_t *index; uint32_t index_cap, index_mask; /* the part in use follows the cells, for locality */
     mk_centry *ent; uint32_t ent_free; int ent_cap, ent_used;
     /* static index: statics as of its last build, in a read-only grid */
     mk_ixent *ix_ent; uint32_t ix_cap;   /* entries: by level, then cell */
@@ -332,7 +334,7 @@ static void index_rebuild(struct mk_hgrid *g)
 static mk_status grow_cells(mk_bp *bp, struct mk_hgrid *g)
 {
     int cap = g->cell_cap * 2;
-    uint32_t isize = (g->index_mask + 1) * 2;
+    uint32_t isize = g->index_cap * 2;
     void *cells = g->cells, *index = NULL;
     mk_status st;
     if (bp->def.fixed_capacity || cap > INT32_MAX / 4) return MK_ERR_CAPACITY;
@@ -341,10 +343,11 @@ static mk_status grow_cells(mk_bp *bp, struct mk_hgrid *g)
         mk_bp_free_(bp, index, isize * sizeof(uint32_t));
         return st;
     }
-    mk_bp_free_(bp, g->index, (size_t)(g->index_mask + 1) * sizeof(uint32_t));
+    mk_bp_free_(bp, g->index, (size_t)g->index_cap * sizeof(uint32_t));
     g->cells = (mk_cell *)cells;
     g->cell_cap = cap;
     g->index = (uint32_t *)index;
+    g->index_cap = isize;
     g->index_mask = isize - 1;
     index_rebuild(g);
     return MK_OK;
@@ -370,6 +373,11 @@ static mk_cell *cell_get(mk_bp *bp, struct mk_hgrid *g, int level, const int64_t
     uint32_t *s = cell_slot(g, level, c);
     mk_cell *cell;
     if (*s != MK_NONE_) return &g->cells[*s];
+    if (2 * (uint32_t)g->cell_count >= g->index_mask && g->index_mask + 1 < g->index_cap) {
+        g->index_mask = g->index_mask * 2 + 1; /* more of the allocated index, at most half full */
+        index_rebuild(g);
+        s = cell_slot(g, level, c);
+    }
     if (g->cell_count == g->cell_cap) {
         mk_status st = grow_cells(bp, g);
         if (st != MK_OK) { if (g->fail == MK_OK) g->fail = st; return NULL; }
@@ -457,10 +465,21 @@ static int in_range(const mk_range *r, const int64_t *c)
     return r && c[0] >= r->lo[0] && c[0] <= r->hi[0] && c[1] >= r->lo[1] && c[1] <= r->hi[1] && c[2] >= r->lo[2] && c[2] <= r->hi[2];
 }
 
+/* Is c the first cell (lowest on every axis) where ranges a and b meet? */
+static int first_shared(const mk_range *a, const mk_range *b, const int64_t *c)
+{
+    int k;
+    for (k = 0; k < 3; ++k)
+        if (c[k] != (a->lo[k] > b->lo[k] ? a->lo[k] : b->lo[k])) return 0;
+    return 1;
+}
+
 /* Files `slot` into every cell of r at `level` outside `skip` (the cells it
  * is already in), and meets the proxies there: all of them on its own level,
  * only natives on coarser levels (guests there are finer than their natives
- * and meet `slot` on their own level). */
+ * and meet `slot` on their own level). A native of this level sharing
+ * several cells is met only in the first: a hash lookup saved per extra
+ * cell. If that cell is in `skip`, the two already share it: a candidate. */
 static void file_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, const mk_range *r, const mk_range *skip, int guest)
 {
     int64_t c[3];
@@ -473,7 +492,8 @@ static void file_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, 
                 if (!(cell = cell_get(bp, g, level, c))) return;
                 for (e = cell->head; e != MK_NONE_; e = g->ent[e].next) {
                     uint32_t who = g->ent[e].who;
-                    if (!guest || !(who & MK_GUEST_)) candidate(bp, g, slot, who & ~MK_GUEST_);
+                    if (who & MK_GUEST_) { if (!guest) candidate(bp, g, slot, who & ~MK_GUEST_); }
+                    else if (first_shared(r, &g->range[who], c)) candidate(bp, g, slot, who);
                 }
                 /* cell_add may move cells (growth): do it last, cell not used after */
                 if (!cell_add(bp, g, cell, slot | (guest ? MK_GUEST_ : 0))) return;
@@ -1123,10 +1143,14 @@ static int grid_arrays(struct mk_hgrid *g, grid_array_ *a)
     return n;
 }
 
-static void reset_cells(struct mk_hgrid *g, int proxies)
+/* Empties the cells, with the part of the index in use sized for about
+ * `expect` cells: a sparse index spread over the allocation would cost a
+ * cache miss per lookup. */
+static void reset_cells(struct mk_hgrid *g, int proxies, int expect)
 {
     int i;
     g->cell_count = 0;
+    for (g->index_mask = 63; g->index_mask + 1 < g->index_cap && g->index_mask < 2u * (uint32_t)expect; g->index_mask = g->index_mask * 2 + 1) {}
     memset(g->index, 0xff, (size_t)(g->index_mask + 1) * sizeof *g->index);
     for (i = 0; i < g->ent_cap; ++i) g->ent[i].next = i + 1 < g->ent_cap ? (uint32_t)i + 1 : MK_NONE_;
     g->ent_free = 0;
@@ -1155,14 +1179,14 @@ mk_status mk_hgrid_create_(mk_bp *bp)
      * filings per proxy, which a wide spread of sizes can still exceed. */
     g->cell_cap = (bp->def.fixed_capacity ? 27 : 2) * bp->cap + 64;
     g->ent_cap = (bp->def.fixed_capacity ? 32 : 4) * bp->cap + 64;
-    g->index_mask = 1;
-    while (g->index_mask + 1 < (uint32_t)g->cell_cap * 2) g->index_mask = g->index_mask * 2 + 1;
+    g->index_cap = 64;
+    while (g->index_cap < (uint32_t)g->cell_cap * 2) g->index_cap *= 2;
     if (!(g->cells = (mk_cell *)mk_bp_alloc_(bp, sizeof(mk_cell) * (size_t)g->cell_cap))) goto fail;
     if (!(g->ent = (mk_centry *)mk_bp_alloc_(bp, sizeof(mk_centry) * (size_t)g->ent_cap))) goto fail;
-    if (!(g->index = (uint32_t *)mk_bp_alloc_(bp, sizeof(uint32_t) * (size_t)(g->index_mask + 1)))) goto fail;
+    if (!(g->index = (uint32_t *)mk_bp_alloc_(bp, sizeof(uint32_t) * (size_t)g->index_cap))) goto fail;
     memset(g->px, 0, sizeof *g->px * (size_t)bp->cap);
     memset(g->swake, 0, sizeof *g->swake * (size_t)bp->cap);
-    reset_cells(g, bp->cap);
+    reset_cells(g, bp->cap, 0);
     return MK_OK;
 fail:
     mk_hgrid_destroy_(bp);
@@ -1179,7 +1203,7 @@ void mk_hgrid_destroy_(mk_bp *bp)
     for (i = 0; i < n; ++i) mk_bp_free_(bp, *a[i].p, a[i].elem * (size_t)bp->cap);
     mk_bp_free_(bp, g->cells, sizeof(mk_cell) * (size_t)g->cell_cap);
     mk_bp_free_(bp, g->ent, sizeof(mk_centry) * (size_t)g->ent_cap);
-    if (g->index) mk_bp_free_(bp, g->index, sizeof(uint32_t) * (size_t)(g->index_mask + 1));
+    if (g->index) mk_bp_free_(bp, g->index, sizeof(uint32_t) * (size_t)g->index_cap);
     mk_bp_free_(bp, g->ix_ent, sizeof *g->ix_ent * (size_t)g->ix_cap);
     mk_bp_free_(bp, g->ix_tmp, sizeof *g->ix_tmp * 2 * (size_t)g->ix_tmp_cap);
     mk_bp_free_(bp, g->ix_dense, sizeof *g->ix_dense * (size_t)g->ix_dense_cap);
@@ -1204,7 +1228,7 @@ static int in_structure(const mk_bp *bp, uint32_t s)
 static void rebuild(mk_bp *bp, struct mk_hgrid *g)
 {
     uint32_t s;
-    reset_cells(g, bp->cap);
+    reset_cells(g, bp->cap, 4 * (bp->live - bp->statics) + 64);
     mk_pairs_forget_(bp);
     mk_bp_commit_(bp);
     ix_build(bp, g);
