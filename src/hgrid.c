@@ -102,7 +102,7 @@ struct mk_hgrid {
     uint8_t used[MK_LEVELS_];    /* level in use since the last rebuild */
     int32_t used_list[MK_LEVELS_]; int used_count; /* ascending */
     /* cells */
-    mk_cell *cells; int cell_count, cell_cap;
+    mk_cell *cells; int cell_count, cell_cap, empty_cells;
     uint32_t *index; uint32_t index_cap, index_mask; /* the part in use follows the cells, for locality */
     mk_centry *ent; uint32_t ent_free; int ent_cap, ent_used;
     /* static index: statics as of its last build, in a read-only grid */
@@ -331,6 +331,20 @@ static void index_rebuild(struct mk_hgrid *g)
     for (i = 0; i < g->cell_count; ++i) *cell_slot(g, g->cells[i].level, g->cells[i].c) = (uint32_t)i;
 }
 
+/* Empty cells stay where they are until they outnumber the others: a
+ * fast mover leaves a trail of them, and deleting each at once (a
+ * backward shift in the index, a cell moved into its place) costs several
+ * cache misses; re-entering one costs none. Then all go in one pass. */
+static void compact_cells(struct mk_hgrid *g)
+{
+    int i, n = 0;
+    for (i = 0; i < g->cell_count; ++i)
+        if (g->cells[i].count) g->cells[n++] = g->cells[i];
+    g->cell_count = n;
+    g->empty_cells = 0;
+    index_rebuild(g);
+}
+
 static mk_status grow_cells(mk_bp *bp, struct mk_hgrid *g)
 {
     int cap = g->cell_cap * 2;
@@ -378,6 +392,10 @@ static mk_cell *cell_get(mk_bp *bp, struct mk_hgrid *g, int level, const int64_t
         index_rebuild(g);
         s = cell_slot(g, level, c);
     }
+    if (g->cell_count == g->cell_cap && g->empty_cells > 0) {
+        compact_cells(g);
+        s = cell_slot(g, level, c);
+    }
     if (g->cell_count == g->cell_cap) {
         mk_status st = grow_cells(bp, g);
         if (st != MK_OK) { if (g->fail == MK_OK) g->fail = st; return NULL; }
@@ -389,27 +407,8 @@ static mk_cell *cell_get(mk_bp *bp, struct mk_hgrid *g, int level, const int64_t
     cell->level = level;
     cell->head = MK_NONE_;
     cell->count = 0;
+    g->empty_cells++; /* until cell_add */
     return cell;
-}
-
-/* Backward-shift deletion of the index slot, then swap-remove of the cell. */
-static void cell_free(struct mk_hgrid *g, mk_cell *cell)
-{
-    uint32_t *s = cell_slot(g, cell->level, cell->c), hole = (uint32_t)(s - g->index), j = hole, idx = *s, last;
-    for (;;) {
-        uint32_t k, home;
-        j = (j + 1) & g->index_mask;
-        k = g->index[j];
-        if (k == MK_NONE_) break;
-        home = cell_hash(g->cells[k].level, g->cells[k].c, g->index_mask);
-        if (((j - home) & g->index_mask) >= ((j - hole) & g->index_mask)) { g->index[hole] = k; hole = j; }
-    }
-    g->index[hole] = MK_NONE_;
-    last = (uint32_t)--g->cell_count;
-    if (idx != last) {
-        g->cells[idx] = g->cells[last];
-        *cell_slot(g, g->cells[idx].level, g->cells[idx].c) = idx;
-    }
 }
 
 static int cell_add(mk_bp *bp, struct mk_hgrid *g, mk_cell *cell, uint32_t who)
@@ -424,7 +423,7 @@ static int cell_add(mk_bp *bp, struct mk_hgrid *g, mk_cell *cell, uint32_t who)
     g->ent[e].who = who;
     g->ent[e].next = cell->head;
     cell->head = e;
-    cell->count++;
+    if (cell->count++ == 0) g->empty_cells--;
     g->ent_used++;
     return 1;
 }
@@ -441,7 +440,7 @@ static void cell_remove(struct mk_hgrid *g, int level, const int64_t *c, uint32_
         g->ent[e].next = g->ent_free;
         g->ent_free = e;
         g->ent_used--;
-        if (--cell->count == 0) cell_free(g, cell);
+        if (--cell->count == 0) g->empty_cells++;
         return;
     }
 }
@@ -1149,7 +1148,7 @@ static int grid_arrays(struct mk_hgrid *g, grid_array_ *a)
 static void reset_cells(struct mk_hgrid *g, int proxies, int expect)
 {
     int i;
-    g->cell_count = 0;
+    g->cell_count = g->empty_cells = 0;
     for (g->index_mask = 63; g->index_mask + 1 < g->index_cap && g->index_mask < 2u * (uint32_t)expect; g->index_mask = g->index_mask * 2 + 1) {}
     memset(g->index, 0xff, (size_t)(g->index_mask + 1) * sizeof *g->index);
     for (i = 0; i < g->ent_cap; ++i) g->ent[i].next = i + 1 < g->ent_cap ? (uint32_t)i + 1 : MK_NONE_;
@@ -1215,7 +1214,7 @@ void mk_hgrid_destroy_(mk_bp *bp)
 void mk_hgrid_counts_(const mk_bp *bp, int *levels, int *cells)
 {
     *levels = bp->grid ? bp->grid->used_count : 0;
-    *cells = bp->grid ? bp->grid->cell_count : 0;
+    *cells = bp->grid ? bp->grid->cell_count - bp->grid->empty_cells : 0;
 }
 
 /* ---- update ---- */
@@ -1300,6 +1299,7 @@ mk_status mk_hgrid_update_(mk_bp *bp)
     if (all) {
         rebuild(bp, g);
     } else {
+        if (g->empty_cells > g->cell_count / 2) compact_cells(g);
         restart_travel(bp, g);
         take_changes(bp, g);
         mk_bp_commit_(bp);
