@@ -1250,36 +1250,44 @@ static int index_stale(const struct mk_hgrid *g)
     return !g->ix_off && g->ix_changes > g->ix_statics / 4 + 64;
 }
 
-/* One pass over the changed proxies, with the old boxes still in place:
- * mark them, add up their travel, re-file what crossed a cell wall. */
+/* A changed proxy, with its old box still in place: mark it, add up its
+ * travel, re-file it if it crossed a cell wall... */
+static void take_change(mk_bp *bp, struct mk_hgrid *g, uint32_t s)
+{
+    uint8_t f = bp->flags[s];
+    double moved;
+    int reg = g->px[s].st & REG_MASK;
+    g->px[s].st |= (uint8_t)(ST_DIRTY | ((f & MK_PF_REFILTER) ? ST_REFILTER : 0));
+    if (reg == REG_INDEXED && (f & (MK_PF_DYING | MK_PF_MOVED))) ix_remove(g, s);
+    if (f & MK_PF_DYING) { unfile(g, s); return; }
+    if (f & MK_PF_NEW) {
+        g->todo[g->todo_count++] = s;
+        if (f & MK_PF_STATIC) g->ix_changes++;
+        else g->px[s].st |= ST_QUERY;
+        return;
+    }
+    if (!(f & MK_PF_MOVED)) return;
+    moved = face_travel(&bp->box[s], &bp->next[s]);
+    g->px[s].travel += moved;
+    if (g->ix_statics && !(g->px[s].travel < g->swake[s])) /* a gap to a static may have closed */
+        g->px[s].st |= (uint8_t)(ST_QUERY | (reg == REG_CELLS && moved * inv_cell(g->level[s]) >= 0.0625 ? ST_TIGHT : 0));
+    if (g->px[s].travel < g->px[s].refile_at) return; /* no face can have reached a wall */
+    if (!refile_in_place(bp, g, s, &bp->next[s], moved)) {
+        unfile(g, s);
+        g->todo[g->todo_count++] = s;
+        g->px[s].st |= ST_QUERY;
+    }
+}
+
+/* ...and commits each new box once its old one is no longer needed (the
+ * commit of mk_bp_commit_, without a second pass over the dirty list). */
 static void take_changes(mk_bp *bp, struct mk_hgrid *g)
 {
     int i;
     for (i = 0; i < bp->dirty_count; ++i) {
         uint32_t s = bp->dirty[i];
-        uint8_t f = bp->flags[s];
-        double moved;
-        int reg = g->px[s].st & REG_MASK;
-        g->px[s].st |= (uint8_t)(ST_DIRTY | ((f & MK_PF_REFILTER) ? ST_REFILTER : 0));
-        if (reg == REG_INDEXED && (f & (MK_PF_DYING | MK_PF_MOVED))) ix_remove(g, s);
-        if (f & MK_PF_DYING) { unfile(g, s); continue; }
-        if (f & MK_PF_NEW) {
-            g->todo[g->todo_count++] = s;
-            if (f & MK_PF_STATIC) g->ix_changes++;
-            else g->px[s].st |= ST_QUERY;
-            continue;
-        }
-        if (!(f & MK_PF_MOVED)) continue;
-        moved = face_travel(&bp->box[s], &bp->next[s]);
-        g->px[s].travel += moved;
-        if (g->ix_statics && !(g->px[s].travel < g->swake[s])) /* a gap to a static may have closed */
-            g->px[s].st |= (uint8_t)(ST_QUERY | (reg == REG_CELLS && moved * inv_cell(g->level[s]) >= 0.0625 ? ST_TIGHT : 0));
-        if (g->px[s].travel < g->px[s].refile_at) continue; /* no face can have reached a wall */
-        if (!refile_in_place(bp, g, s, &bp->next[s], moved)) {
-            unfile(g, s);
-            g->todo[g->todo_count++] = s;
-            g->px[s].st |= ST_QUERY;
-        }
+        take_change(bp, g, s);
+        bp->box[s] = bp->next[s];
     }
 }
 
@@ -1302,7 +1310,6 @@ mk_status mk_hgrid_update_(mk_bp *bp)
         if (g->empty_cells > g->cell_count / 2) compact_cells(g);
         restart_travel(bp, g);
         take_changes(bp, g);
-        mk_bp_commit_(bp);
         for (i = 0; i < g->todo_count && g->fail == MK_OK; ++i) file(bp, g, g->todo[i]);
         query_all_statics(bp, g, 0);
     }
