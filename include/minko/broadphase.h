@@ -61,8 +61,9 @@
  *                when that is more.
  *
  * Memory per proxy is fixed at creation for SAP (about 0.5 kB); the pair
- * table and the grid's cells grow on demand. With fixed_capacity the grid
- * needs pair_capacity for its candidates, not just the pairs.
+ * table, the grid's cells and its static index grow on demand. With
+ * fixed_capacity the grid needs pair_capacity for its candidates, not just
+ * the pairs, and has no static index (statics are filed in cells).
  */
 #ifndef MINKO_BROADPHASE_H
 #define MINKO_BROADPHASE_H
