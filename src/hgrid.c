@@ -31,7 +31,8 @@
 #include "broadphase_internal.h"
 
 #define MK_NONE_ UINT32_MAX
-#define MK_GUEST_ 0x80000000u
+#define MK_GUEST_ 0x80000000u /* in a cell entry: filed there as a guest */
+#define MK_BUMP_ 0x80000000u  /* in todo: file one level coarser */
 #define MK_LEVEL_MIN_ (-100)
 #define MK_LEVEL_MAX_ 1100
 #define MK_LEVELS_ (MK_LEVEL_MAX_ - MK_LEVEL_MIN_ + 1)
@@ -70,6 +71,7 @@ typedef struct mk_gproxy {
     double travel;     /* sum over updates of the largest move of any face */
     double refile_at;  /* travel at which a face may first reach a cell wall */
     uint8_t st;        /* REG_* | ST_* */
+    uint8_t fast;      /* filed in cells, and fast when it last left its cells (counted in fast[]) */
 } mk_gproxy;
 
 /* ...a static's entry: a copy of its box, so a cell is read in one sweep... */
@@ -94,11 +96,12 @@ struct mk_hgrid {
     mk_range *range;        /* native cell range */
     mk_gproxy *px;          /* what the per-update loops read, one record per slot */
     uint32_t *ov_pos;       /* index in oversized[] */
-    uint32_t *todo; int todo_count; /* proxies to file in this update */
+    uint32_t *todo; int todo_count; /* proxies to file in this update (| MK_BUMP_) */
     int updates;            /* since travel was last reset to 0 */
     uint32_t *oversized; int ov_count;
     /* levels */
     int32_t natives[MK_LEVELS_]; /* natives per level */
+    int32_t fast[MK_LEVELS_];    /* natives per level that are fast (gproxy.fast) */
     uint8_t used[MK_LEVELS_];    /* level in use since the last rebuild */
     int32_t used_list[MK_LEVELS_]; int used_count; /* ascending */
     /* cells */
@@ -189,11 +192,30 @@ static int level_of(const mk_aabb *b)
  * of the ideal: rounding makes a unit cube measure 1 - ulp or 1 + ulp from
  * frame to frame, and every level change re-files all its cells. Any level
  * is correct (cell ranges come from the boxes); the choice only sets cost. */
-static int keeps_level(const mk_aabb *b, int own)
+static int keeps_level(const mk_aabb *b, int own, int *native)
 {
     int l, lc;
     level_bounds(b, &l, &lc);
+    *native = lc > l ? lc : l;
     return lc <= own && l >= own - 1 && l <= own + 1;
+}
+
+/* A move of a quarter of a cell or more per update (but less than a jump of
+ * several cells, which is a teleport, not speed) is fast. */
+static int is_fast(double moved, int level)
+{
+    double speed = moved * inv_cell(level);
+    return speed >= 0.25 && speed < 4;
+}
+
+/* Fast movers cross a cell wall nearly every update, and re-filing is what
+ * their updates cost: they are filed one level coarser (half the walls,
+ * fewer cells) while most natives of their size level are fast too. Only
+ * then: opening a coarser level makes every finer proxy its guest, which
+ * a level of slow proxies would pay for on every re-filing. */
+static int wants_bump(const struct mk_hgrid *g, int native, double moved)
+{
+    return native < MK_LEVEL_MAX_ && is_fast(moved, native) && 2 * g->fast[native - MK_LEVEL_MIN_] > g->natives[native - MK_LEVEL_MIN_];
 }
 
 
@@ -546,6 +568,8 @@ static void unfile(struct mk_hgrid *g, uint32_t slot)
             unfile_range(g, slot, g->used_list[i], &r, NULL, 1);
         }
         g->natives[own - MK_LEVEL_MIN_]--;
+        g->fast[own - MK_LEVEL_MIN_] -= g->px[slot].fast;
+        g->px[slot].fast = 0;
     }
     g->px[slot].st = (uint8_t)((g->px[slot].st & ~REG_MASK) | ST_GONE);
 }
@@ -563,7 +587,8 @@ static void open_level(mk_bp *bp, struct mk_hgrid *g, int level)
     }
 }
 
-static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
+/* Files slot at its size's level, one coarser if bump (a fast mover). */
+static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int bump)
 {
     const mk_aabb *b = &bp->box[slot];
     int i, own;
@@ -579,6 +604,7 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
         return;
     }
     own = level_of(b);
+    if (bump && own < MK_LEVEL_MAX_) ++own;
     if (!g->used[own - MK_LEVEL_MIN_]) open_level(bp, g, own);
     g->level[slot] = own;
     g->natives[own - MK_LEVEL_MIN_]++;
@@ -596,10 +622,11 @@ static void file(mk_bp *bp, struct mk_hgrid *g, uint32_t slot)
 }
 
 /* A moved proxy that keeps its level is re-filed in place, cell by cell;
- * returns 0 when it must be unfiled and filed again (new level, oversized). */
-static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const mk_aabb *nb, double moved)
+ * returns 0 when it must be unfiled and filed again (new level, oversized),
+ * one level coarser if *bump. */
+static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const mk_aabb *nb, double moved, int *bump)
 {
-    int own = g->level[slot], i;
+    int own = g->level[slot], i, native;
     mk_range r, o, old = g->range[slot];
     double room;
     if ((g->px[slot].st & REG_MASK) == REG_OVERSIZED && is_oversized(nb)) return 1; /* still everyone's candidate */
@@ -608,7 +635,13 @@ static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const m
     if (room >= 0) { g->px[slot].refile_at = room_until(g->px[slot].travel, room); return 1; }
     /* Left its cells. The level is only reconsidered now: while the box
      * stays within them its size cannot be far off. */
-    if (!keeps_level(nb, own)) return 0;
+    if (is_fast(moved, own) != g->px[slot].fast) { /* speed as of its last wall crossing */
+        g->px[slot].fast ^= 1;
+        g->fast[own - MK_LEVEL_MIN_] += g->px[slot].fast ? 1 : -1;
+    }
+    if (!keeps_level(nb, own, &native)) return 0;
+    *bump = wants_bump(g, native, moved);
+    if (*bump ? own != native + 1 : own > native && moved * inv_cell(native) < 0.0625) return 0;
     /* The margin pays for slow or jittering boxes; a box moving more than
      * the margin per update would leave it anyway, and gets its bare cells. */
     if (moved * inv_cell(own) < 0.0625) { if (!fat_range(nb, own, &r)) return 0; }
@@ -1154,8 +1187,9 @@ static void reset_cells(struct mk_hgrid *g, int proxies, int expect)
     for (i = 0; i < g->ent_cap; ++i) g->ent[i].next = i + 1 < g->ent_cap ? (uint32_t)i + 1 : MK_NONE_;
     g->ent_free = 0;
     g->ent_used = 0;
-    for (i = 0; i < proxies; ++i) g->px[i].st = 0;
+    for (i = 0; i < proxies; ++i) g->px[i].st = g->px[i].fast = 0;
     memset(g->natives, 0, sizeof g->natives);
+    memset(g->fast, 0, sizeof g->fast);
     memset(g->used, 0, sizeof g->used);
     g->used_count = 0;
     g->ov_count = 0;
@@ -1239,7 +1273,7 @@ static void rebuild(mk_bp *bp, struct mk_hgrid *g)
         if (!g->used[l - MK_LEVEL_MIN_]) use_level_list(g, l);
     }
     for (s = 0; s < (uint32_t)bp->hi_slot && g->fail == MK_OK; ++s)
-        if (in_structure(bp, s) && g->px[s].st != REG_INDEXED) file(bp, g, s);
+        if (in_structure(bp, s) && g->px[s].st != REG_INDEXED) file(bp, g, s, 0);
     query_all_statics(bp, g, 1);
 }
 
@@ -1256,7 +1290,7 @@ static void take_change(mk_bp *bp, struct mk_hgrid *g, uint32_t s)
 {
     uint8_t f = bp->flags[s];
     double moved;
-    int reg = g->px[s].st & REG_MASK;
+    int reg = g->px[s].st & REG_MASK, bump = 0;
     g->px[s].st |= (uint8_t)(ST_DIRTY | ((f & MK_PF_REFILTER) ? ST_REFILTER : 0));
     if (reg == REG_INDEXED && (f & (MK_PF_DYING | MK_PF_MOVED))) ix_remove(g, s);
     if (f & MK_PF_DYING) { unfile(g, s); return; }
@@ -1272,9 +1306,9 @@ static void take_change(mk_bp *bp, struct mk_hgrid *g, uint32_t s)
     if (g->ix_statics && !(g->px[s].travel < g->swake[s])) /* a gap to a static may have closed */
         g->px[s].st |= (uint8_t)(ST_QUERY | (reg == REG_CELLS && moved * inv_cell(g->level[s]) >= 0.0625 ? ST_TIGHT : 0));
     if (g->px[s].travel < g->px[s].refile_at) return; /* no face can have reached a wall */
-    if (!refile_in_place(bp, g, s, &bp->next[s], moved)) {
+    if (!refile_in_place(bp, g, s, &bp->next[s], moved, &bump)) {
         unfile(g, s);
-        g->todo[g->todo_count++] = s;
+        g->todo[g->todo_count++] = s | (bump ? MK_BUMP_ : 0);
         g->px[s].st |= ST_QUERY;
     }
 }
@@ -1310,7 +1344,7 @@ mk_status mk_hgrid_update_(mk_bp *bp)
         if (g->empty_cells > g->cell_count / 2) compact_cells(g);
         restart_travel(bp, g);
         take_changes(bp, g);
-        for (i = 0; i < g->todo_count && g->fail == MK_OK; ++i) file(bp, g, g->todo[i]);
+        for (i = 0; i < g->todo_count && g->fail == MK_OK; ++i) file(bp, g, g->todo[i] & ~MK_BUMP_, g->todo[i] >= MK_BUMP_);
         query_all_statics(bp, g, 0);
     }
     if (g->fail == MK_OK) retest(bp, g, all);
