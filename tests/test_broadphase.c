@@ -493,10 +493,11 @@ END_TEST
 
 /* The grid's static index: mostly statics in two far-apart clusters (the
  * index hashes its cells then) or one (a dense array of cells), slow and
- * fast movers among them; now and then a static moves (it leaves the index)
- * or one goes and another comes (enough of that rebuilds the index); the
- * filter refuses some pairs; region queries see indexed statics. */
-static void run_statics(uint64_t seed, double apart)
+ * fast movers among them (every one fast: the grid files them a level
+ * coarser); now and then a static moves (it leaves the index) or one goes
+ * and another comes (enough of that rebuilds the index); the filter refuses
+ * some pairs; region queries see indexed statics. */
+static void run_statics(uint64_t seed, double apart, int fast_every)
 {
     static world w;
     static hits h;
@@ -506,7 +507,7 @@ static void run_statics(uint64_t seed, double apart)
         mk_aabb b = random_box(&w.rng, 12, 0.3, 3);
         mk_vec3 off = mk_v3((mk_real)(i % 2 ? apart : 0), 0, 0);
         add_obj(&w, mk_aabb_make(mk_v3_add(b.lo, off), mk_v3_add(b.hi, off)), i % 5 != 0);
-        w.o[i].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)(i % 3 == 0 ? 0.4 : 0.03));
+        w.o[i].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)(i % fast_every == 0 ? 0.4 : 0.03));
     }
     for (f = 0; f < 160; ++f) {
         for (i = 0; i < w.n; ++i) {
@@ -542,10 +543,13 @@ static void run_statics(uint64_t seed, double apart)
     world_fini(&w);
 }
 
-START_TEST(static_index_dense) { run_statics(21, 0); }
+START_TEST(static_index_dense) { run_statics(21, 0, 3); }
 END_TEST
 
-START_TEST(static_index_hashed) { run_statics(22, 5000); }
+START_TEST(static_index_hashed) { run_statics(22, 5000, 3); }
+END_TEST
+
+START_TEST(static_index_fast_movers) { run_statics(23, 0, 1); }
 END_TEST
 
 /* A swept box and early clipping. */
@@ -780,6 +784,7 @@ static Suite *broadphase_suite(void)
     tcase_add_test(tc, region_and_ray_queries);
     tcase_add_test(tc, static_index_dense);
     tcase_add_test(tc, static_index_hashed);
+    tcase_add_test(tc, static_index_fast_movers);
     tcase_add_test(tc, swept_box_and_clipping);
     tcase_add_test(tc, steady_state_does_not_allocate);
     tcase_add_test(tc, fixed_capacity_overflow_recovers);
