@@ -51,8 +51,9 @@
  *                (a proxy is also filed in every coarser level in use, and
  *                candidates outnumber pairs up to ~10x), when one cell holds
  *                many proxies (candidates grow with its square), on fast
- *                motion (every crossing re-files cells and a fast mover looks
- *                up statics every update), on teleports (each one re-files
+ *                motion (every crossing re-files cells, a fast mover looks up
+ *                statics every update; a level where most proxies are fast is
+ *                filed one level coarser to halve the crossings), on teleports (each one re-files
  *                all its cells and rebuilds its candidates), and on statics
  *                that keep moving (a moved static leaves the index for the
  *                cells; the index is rebuilt, O(n), once a quarter of it
