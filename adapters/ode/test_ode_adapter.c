@@ -704,6 +704,52 @@ START_TEST(test_pair_cache)
 }
 END_TEST
 
+/* The per-pair records under churn: pairs appear, go idle and are replaced
+ * by new geoms (some at reused addresses), so the record table grows,
+ * recycles idle records and reuses them; every resting pair keeps its four
+ * points and Minko answers every call. */
+START_TEST(test_pair_cache_churn)
+{
+    enum { N = 300, FRAMES = 12 };
+    dGeomID top[N], base[N];
+    dContactGeom c[MAXC];
+    long long before;
+    int i, frame;
+    dInitODE2(0);
+    for (i = 0; i < N; i++) {
+        base[i] = dCreateBox(0, 1, 1, 1);
+        dGeomSetPosition(base[i], 3 * i, 0, 0);
+        top[i] = NULL;
+    }
+    if (!mk_ode_supports(base[0], base[1])) {
+        fprintf(stderr, "test_pair_cache_churn: box-box is not in this Minko build; skipped\n");
+        for (i = 0; i < N; i++) dGeomDestroy(base[i]);
+        mk_ode_close();
+        return;
+    }
+    before = minko_calls();
+    for (frame = 0; frame < FRAMES; frame++) {
+        /* a third of the stacks is live each frame; every third frame they are rebuilt with new tops */
+        int from = (frame / 3 % 3) * (N / 3);
+        for (i = from; i < from + N / 3; i++) {
+            if (frame % 3 == 0) {
+                if (top[i]) dGeomDestroy(top[i]);
+                top[i] = dCreateBox(0, 0.8, 0.8, 0.8);
+                dGeomSetPosition(top[i], 3 * i + 0.05, 0.02, 0.899);
+            }
+            ck_assert_int_eq(mk_ode_collide(i % 2 ? top[i] : base[i], i % 2 ? base[i] : top[i], MAXC, c, sizeof(dContactGeom)), 4);
+            MK_ASSERT_NEAR(c[0].depth, 0.001, 100 * TOL);
+        }
+    }
+    ck_assert_int_eq((int)(minko_calls() - before), FRAMES * (N / 3));
+    for (i = 0; i < N; i++) {
+        if (top[i]) dGeomDestroy(top[i]);
+        dGeomDestroy(base[i]);
+    }
+    mk_ode_close();
+}
+END_TEST
+
 /* A box resting on a plane has four contacts; the stride, the cap and the
  * untouched slots beyond the count are checked with canaries. */
 START_TEST(test_stride_and_max_contacts)
@@ -960,6 +1006,7 @@ int main(void)
     tcase_add_test(np, test_sphere_box_matches_ode);
     tcase_add_test(np, test_box_box_matches_ode);
     tcase_add_test(np, test_pair_cache);
+    tcase_add_test(np, test_pair_cache_churn);
     tcase_add_test(np, test_stride_and_max_contacts);
     tcase_add_test(np, test_fallback_to_dcollide);
     tcase_add_test(np, test_override_reinstalled_after_reinit);
