@@ -14,13 +14,18 @@
 // reported after the reference contact, i.e. with the shapes already overlapping),
 // `wrong_bool` (a hit where the reference never touches, farther than the backend's
 // own tolerance), `failures` (error status, iteration cap, unsupported pair), and the
-// reference distance at the reported time relative to the pair's size. Backend names
-// carry their setting (minko.tol=1e-3 is a tolerance of 1e-3 x the pair's size,
-// plain "minko" the default); variant is the motion class, linear or rotating.
+// reference distance at the reported time relative to the pair's size, and
+// `out_of_bound` (oob): hits whose reference distance lies outside the band the
+// backend's contract promises (mk_toi: [0, tolerance], up to its rounding floor).
+// Backend names carry their setting (minko.tol=1e-3 is a tolerance of 1e-3 x the
+// pair's size, plain "minko" the default); "minko.bilateral" is the bilateral
+// advancement prototype of bench_toi_bilateral.c, swept over the same tolerances,
+// so the table gives error against run time for both advancement methods.
+// Variant is the motion class, linear or rotating.
 // JSON Lines per ../shared/BENCH_FORMAT.md (suite "toi") with --json FILE, and a
 // table on stdout.
 //
-//   bench_toi [--quick] [--json FILE] [--cases N] [--seed S] [--family NAME] [--backend PREFIX]
+//   bench_toi [--quick] [--json FILE] [--cases N] [--seed S] [--family NAME] [--backend NAME|PREFIX]
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/NarrowPhaseCollision/btContinuousConvexCollision.h>
@@ -45,6 +50,7 @@ extern "C" {
 #include "support/mk_rng.h"
 #include "support/oracle.h"
 }
+#include "bench_toi_bilateral.h"
 
 namespace {
 
@@ -304,27 +310,50 @@ struct Backend {
     // Distance within which the backend's contract lets it report a hit that
     // never becomes a contact (Minko's tolerance, Bullet's 0.001 stop).
     virtual double slack(const Case &) const { return 0; }
+    // The distance band [bound_low, bound] a hit promises (checked against the
+    // reference); bound < 0: the backend promises none.
+    virtual double bound(const Case &) const { return -1; }
+    virtual double bound_low(const Case &) const { return 0; }
     virtual void prepare(const std::vector<Case> &cases) = 0;
     virtual Answer run(size_t i, const Case &c) = 0;
 };
 
+// mk_toi's tolerance floor (toi.c), from the case: the bound of the contract
+// holds up to it, and a tolerance below it is raised to it.
+double minko_floor(const Case &c)
+{
+    const double eps = (double)MK_REAL_EPSILON * (sizeof(mk_real) == sizeof(double) ? 1e4 : 1e2);
+    mk_vec3 d = mk_v3_sub(c.sb.c0, c.sa.c0), v = mk_v3_sub(mk_v3_sub(c.sb.c1, c.sb.c0), mk_v3_sub(c.sa.c1, c.sa.c0));
+    return eps * (c.scale + (double)mk_v3_len(d) + (double)mk_v3_len(v));
+}
+
+// Minko's mk_toi (conservative advancement), or the bilateral advancement
+// prototype of bench_toi_bilateral.c on the same internals, at a tolerance
+// relative to the pair's size.
 struct MinkoBackend : Backend {
     double tol;
-    explicit MinkoBackend(double t) : tol(t)
+    bool bilateral;
+    MinkoBackend(double t, bool bl) : tol(t), bilateral(bl)
     {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "minko.tol=%g", t);
-        name = t == 0 ? "minko" : buf; // 0: the default, the rounding floor
+        char buf[48];
+        const char *base = bl ? "minko.bilateral" : "minko";
+        std::snprintf(buf, sizeof buf, "%s.tol=%g", base, t);
+        name = t == 0 ? base : buf; // 0: the default, the rounding floor
         linear_only = false;
     }
-    double slack(const Case &c) const override { return tol * c.scale; }
+    double slack(const Case &c) const override { return std::max(tol * c.scale, minko_floor(c)); }
+    // The contract's bound: at a hit the distance is in [0, tolerance], up to the floor.
+    double bound(const Case &c) const override { return slack(c) + minko_floor(c); }
+    double bound_low(const Case &c) const override { return -minko_floor(c); }
     void prepare(const std::vector<Case> &) override {}
     Answer run(size_t, const Case &c) override
     {
         mk_toi_result r;
         Answer a = {false, 1, false, 0};
-        if (mk_toi(&c.a.shape, &c.sa, &c.b.shape, &c.sb, 0, (mk_real)(tol * c.scale), &r) != MK_OK || r.state == MK_TOI_FAILED ||
-            !(r.t == r.t)) {
+        mk_real t = (mk_real)(tol * c.scale);
+        mk_status st = bilateral ? bench_toi_bilateral(&c.a.shape, &c.sa, &c.b.shape, &c.sb, 0, t, &r)
+                                 : mk_toi(&c.a.shape, &c.sa, &c.b.shape, &c.sb, 0, t, &r);
+        if (st != MK_OK || r.state == MK_TOI_FAILED || !(r.t == r.t)) {
             a.failed = true;
             return a;
         }
@@ -487,6 +516,7 @@ struct Row {
     int n;
     double ns, p50, p99, max_err, dist_min, dist_max, iterations;
     int tunnelled, late, wrong, failures, touching;
+    int out_of_bound; // hits outside the promised distance band; -1: none promised
 };
 
 double percentile(std::vector<double> v, double p)
@@ -515,6 +545,7 @@ Row measure(const Family &f, Backend &be, int loops)
     row.ns = best / (double)f.cases.size();
     std::vector<double> err;
     row.tunnelled = row.late = row.wrong = row.failures = 0;
+    row.out_of_bound = f.cases.empty() || be.bound(f.cases[0]) < 0 ? -1 : 0;
     row.dist_min = 1e300;
     row.dist_max = -1e300;
     row.touching = f.touching;
@@ -533,6 +564,7 @@ Row measure(const Family &f, Backend &be, int loops)
         double d = (double)ref.distance((ld)a.t);
         row.dist_min = std::min(row.dist_min, d / c.scale); // relative to the pair's size
         row.dist_max = std::max(row.dist_max, d / c.scale);
+        if (row.out_of_bound >= 0 && (d < be.bound_low(c) || d > be.bound(c))) ++row.out_of_bound;
         if (c.t_ref < 0) {
             if (d > be.slack(c) + 1e-9 * c.scale) ++row.wrong; // a hit where nothing ever touches
             continue;
@@ -550,8 +582,10 @@ Row measure(const Family &f, Backend &be, int loops)
 
 void print_row(const Row &r)
 {
-    std::printf("%-21s %-9s %-38s %9.0f %9.2e %9.2e %9.2e %5d %5d %5d %5d %10.2e %10.2e %6.1f\n", r.family.c_str(), r.variant.c_str(),
-                r.backend.c_str(), r.ns, r.p50, r.p99, r.max_err, r.tunnelled, r.late, r.wrong, r.failures, r.dist_min, r.dist_max,
+    char oob[16] = "-";
+    if (r.out_of_bound >= 0) std::snprintf(oob, sizeof oob, "%d", r.out_of_bound);
+    std::printf("%-21s %-9s %-26s %9.0f %9.2e %9.2e %9.2e %5d %5d %5d %5d %5s %10.2e %10.2e %6.1f\n", r.family.c_str(), r.variant.c_str(),
+                r.backend.c_str(), r.ns, r.p50, r.p99, r.max_err, r.tunnelled, r.late, r.wrong, r.failures, oob, r.dist_min, r.dist_max,
                 r.iterations);
 }
 
@@ -561,30 +595,47 @@ void json_row(FILE *f, const Row &r)
                  "{\"suite\":\"toi\",\"case\":\"%s\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":%d,\"touching\":%d,"
                  "\"ns_per_query\":%.1f,\"rel_err_p50\":%.3e,\"rel_err_p99\":%.3e,\"rel_err_max\":%.3e,"
                  "\"tunnelled\":%d,\"late\":%d,\"wrong_bool\":%d,\"failures\":%d,"
-                 "\"dist_at_hit_min\":%.3e,\"dist_at_hit_max\":%.3e,\"iterations_mean\":%.2f}\n",
+                 "\"dist_at_hit_min\":%.3e,\"dist_at_hit_max\":%.3e,\"iterations_mean\":%.2f",
                  r.family.c_str(), r.variant.c_str(), r.backend.c_str(), r.n, r.touching, r.ns, r.p50, r.p99, r.max_err, r.tunnelled,
                  r.late, r.wrong, r.failures, r.dist_min, r.dist_max, r.iterations);
+    if (r.out_of_bound >= 0) std::fprintf(f, ",\"out_of_bound\":%d", r.out_of_bound);
+    std::fprintf(f, "}\n");
 }
 
-// The speed target, read off one run: the cheapest Minko row whose
-// accuracy is at least Bullet's conservative advancement's, and the time ratio.
-std::string compare_with_bullet(const std::vector<Row> &rows)
+// The speed target, read off one run: the cheapest row of one Minko
+// method (mk_toi: "minko"; the prototype: "minko.bilateral") whose accuracy is
+// at least Bullet's conservative advancement's, and the time ratio.
+bool of_method(const std::string &backend, const std::string &method)
+{
+    return backend == method || backend.compare(0, method.size() + 5, method + ".tol=") == 0;
+}
+
+std::string compare_with_bullet(const std::vector<Row> &rows, const std::string &method)
 {
     const Row *bt = nullptr, *best = nullptr;
     for (const Row &r : rows)
         if (r.backend == std::string(kBullet) + ".continuous_convex") bt = &r;
     if (!bt) return "";
     for (const Row &r : rows)
-        if (r.backend.compare(0, 5, "minko") == 0 && r.p99 <= bt->p99 && r.tunnelled <= bt->tunnelled && r.late <= bt->late &&
+        if (of_method(r.backend, method) && r.p99 <= bt->p99 && r.tunnelled <= bt->tunnelled && r.late <= bt->late &&
             r.failures <= bt->failures && (!best || r.ns < best->ns))
             best = &r;
     char buf[256];
     if (!best)
-        std::snprintf(buf, sizeof buf, "  %-21s none of Minko's settings is as accurate", bt->family.c_str());
+        std::snprintf(buf, sizeof buf, "  %-21s %-26s no setting is as accurate", bt->family.c_str(), method.c_str());
     else
-        std::snprintf(buf, sizeof buf, "  %-21s %-20s %7.0f ns (err p99 %.2e)  vs %7.0f ns (err p99 %.2e): ratio %.2f", bt->family.c_str(),
+        std::snprintf(buf, sizeof buf, "  %-21s %-26s %7.0f ns (err p99 %.2e)  vs %7.0f ns (err p99 %.2e): ratio %.2f", bt->family.c_str(),
                       best->backend.c_str(), best->ns, best->p99, bt->ns, bt->p99, best->ns / bt->ns);
     return buf;
+}
+
+// --backend NAME: that backend alone when one is called exactly so (for
+// callgrind runs of one setting), else every backend whose name starts so.
+bool backend_selected(const std::string &name, const char *filter, const std::vector<std::unique_ptr<Backend>> &backends)
+{
+    for (const auto &be : backends)
+        if (be->name == filter) return name == filter;
+    return name.compare(0, std::strlen(filter), filter) == 0;
 }
 
 } // namespace
@@ -604,7 +655,7 @@ int main(int argc, char **argv)
         else if (!std::strcmp(argv[i], "--family") && i + 1 < argc) only_family = argv[++i];
         else if (!std::strcmp(argv[i], "--backend") && i + 1 < argc) only_backend = argv[++i];
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--cases N] [--seed S] [--family NAME] [--backend PREFIX]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--quick] [--json FILE] [--cases N] [--seed S] [--family NAME] [--backend NAME|PREFIX]\n", argv[0]);
             return 2;
         }
     }
@@ -631,8 +682,9 @@ int main(int argc, char **argv)
 
     std::vector<std::unique_ptr<Backend>> backends;
     // Tolerances relative to the pair's size; 0 is Minko's default, the rounding floor.
-    const double tols[] = {1e-2, 1e-3, 1e-4, 1e-6, 1e-9, 0};
-    for (double t : tols) backends.emplace_back(new MinkoBackend(t));
+    const double tols[] = {1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-9, 0};
+    for (double t : tols) backends.emplace_back(new MinkoBackend(t, false));
+    for (double t : tols) backends.emplace_back(new MinkoBackend(t, true));
     backends.emplace_back(new BulletBackend(false));
     backends.emplace_back(new BulletBackend(true));
     backends.emplace_back(new FclBackend(fcl::CCDC_NAIVE, 10));
@@ -644,23 +696,25 @@ int main(int argc, char **argv)
 
     std::printf("time of impact: %d cases per family (seed %llu), reference = long-double oracle, tolerances relative to the pair's size\n",
                 n, (unsigned long long)seed);
-    std::printf("%-21s %-9s %-38s %9s %9s %9s %9s %5s %5s %5s %5s %10s %10s %6s\n", "family", "motion", "backend", "ns/query", "err p50",
-                "err p99", "err max", "tunl", "late", "wrong", "fail", "d@hit min", "d@hit max", "iters");
+    std::printf("%-21s %-9s %-26s %9s %9s %9s %9s %5s %5s %5s %5s %5s %10s %10s %6s\n", "family", "motion", "backend", "ns/query", "err p50",
+                "err p99", "err max", "tunl", "late", "wrong", "fail", "oob", "d@hit min", "d@hit max", "iters");
     std::vector<std::string> summary;
     for (const Family &f : families) {
         std::vector<Row> rows;
         for (auto &be : backends) {
             if (be->linear_only && f.rotating) continue;
-            if (only_backend && be->name.compare(0, std::strlen(only_backend), only_backend)) continue;
+            if (only_backend && !backend_selected(be->name, only_backend, backends)) continue;
             Row r = measure(f, *be, loops);
             print_row(r);
             if (jf) json_row(jf, r);
             rows.push_back(r);
         }
         std::printf("\n");
-        summary.push_back(compare_with_bullet(rows));
+        summary.push_back(compare_with_bullet(rows, "minko"));
+        summary.push_back(compare_with_bullet(rows, "minko.bilateral"));
     }
-    std::printf("Minko's fastest setting at equal or better accuracy (err p99, tunnelled, late) than %s.continuous_convex:\n", kBullet);
+    std::printf("Fastest setting of each Minko method at equal or better accuracy (err p99, tunnelled, late, failures) than %s.continuous_convex:\n",
+                kBullet);
     for (const std::string &line : summary)
         if (!line.empty()) std::printf("%s\n", line.c_str());
     if (jf) std::fclose(jf);

@@ -5,12 +5,19 @@
 FCL_CFLAGS = $(patsubst -I%,-isystem %,$(shell $(PKG_CONFIG) --cflags fcl))
 FCL_LIBS = $(shell $(PKG_CONFIG) --libs fcl)
 
-$(B)/demos/bench_toi: demos/bench_toi.cpp $(B)/tests/support/oracle.o $(STATIC_LIB)
+# The bilateral advancement prototype runs on the library's internal GJK
+# (src/gjk.h), linked statically like mk_toi itself.
+$(B)/demos/bench_toi_bilateral.o: demos/bench_toi_bilateral.c $(CONFIG_H)
+	@mkdir -p $(@D)
+	$(say) CC $@
+	$(Q)$(CC) $(APP_CFLAGS) -MMD -MP -c $< -o $@
+
+$(B)/demos/bench_toi: demos/bench_toi.cpp $(B)/demos/bench_toi_bilateral.o $(B)/tests/support/oracle.o $(STATIC_LIB)
 	@mkdir -p $(@D)
 	$(say) CXXLD $@
-	$(Q)$(CXX) $(APP_CXXFLAGS) -Itests $(BULLET_CFLAGS) $(FCL_CFLAGS) -MMD -MP $< $(B)/tests/support/oracle.o $(STATIC_LIB) $(LDSAN) $(LDFLAGS) $(BULLET_LIBS) $(FCL_LIBS) -lm -o $@
+	$(Q)$(CXX) $(APP_CXXFLAGS) -Itests -Idemos $(BULLET_CFLAGS) $(FCL_CFLAGS) -MMD -MP $< $(B)/demos/bench_toi_bilateral.o $(B)/tests/support/oracle.o $(STATIC_LIB) $(LDSAN) $(LDFLAGS) $(BULLET_LIBS) $(FCL_LIBS) -lm -o $@
 
--include $(B)/demos/bench_toi.d
+-include $(B)/demos/bench_toi.d $(B)/demos/bench_toi_bilateral.d
 DEMO_BINS += $(B)/demos/bench_toi
 BENCH_RUNS += $(call mk_run,$(B)/demos/bench_toi --json $(BENCH_DIR)/toi.jsonl)
 DEMO_RUNS += $(call mk_run,$(B)/demos/bench_toi --quick --json $(BENCH_DIR)/toi_quick.jsonl)

@@ -12,7 +12,9 @@
  *   feature  lambda^0 from mk_contact_cache, keyed by (body, body, feature pair);
  *   nearest  Bullet's policy: the previous frame's point of the same pair
  *            nearest in body A's local frame, if within 0.02 (greedy, each
- *            old point used once, as btPersistentManifold's replacement does).
+ *            old point used once, as btPersistentManifold's replacement does);
+ *   world    seed 000's first option: the previous point of the same pair
+ *            nearest in world space, whatever the distance (greedy as above).
  * and with two solver budgets:
  *   pgs10    exactly 10 iterations per step: does the scene stand and settle?
  *   converge iterate until no row changes any velocity by more than
@@ -23,7 +25,9 @@
  * tower released from exact contact, whose landing sets it rocking.
  * Per scene, budget and warm start: mean / p95 / max iterations per step,
  * the velocity residual left after the last iteration, the fraction of
- * contact points that found a lambda^0, the largest penetration over the
+ * contact points that found a lambda^0 and, of those, the fraction given
+ * another contact's (the old point's feature pair differs: seed 000's
+ * a -> c, b -> d turned b -> c), the largest penetration over the
  * last second, drift (largest horizontal displacement of a box from where it
  * started), kinetic energy per box at the end, and how far the top box came
  * down. Output: a table on stdout and JSON Lines (suite "contacts",
@@ -50,8 +54,8 @@
 #define RESIDUAL_TOL MK_REAL(1e-5)  /* m/s */
 #define MAX_CONVERGE_ITERS 500
 
-typedef enum warm_mode { WARM_COLD, WARM_FEATURE, WARM_NEAREST, WARM_COUNT } warm_mode;
-static const char *const warm_names[WARM_COUNT] = {"cold", "feature", "nearest"};
+typedef enum warm_mode { WARM_COLD, WARM_FEATURE, WARM_NEAREST, WARM_WORLD, WARM_COUNT } warm_mode;
+static const char *const warm_names[WARM_COUNT] = {"cold", "feature", "nearest", "world"};
 
 typedef struct body {
     mk_shape shape;
@@ -67,7 +71,7 @@ typedef struct body {
 typedef struct row {
     int a, b;
     uint32_t features;
-    mk_vec3 n, t1, t2, ra, rb, local_a;
+    mk_vec3 n, t1, t2, ra, rb, local_a, world;
     mk_real mn, mt1, mt2;  /* effective masses 1 / (J M^-1 J^T) */
     mk_real kn;            /* J M^-1 J^T of the normal row: turns an impulse into a velocity change */
     mk_real bias;          /* target normal velocity */
@@ -75,10 +79,11 @@ typedef struct row {
     mk_real ln, lt1, lt2, lp;
     mk_real depth;
     int matched;
+    int wrong;             /* matched to an old point of other features */
 } row;
 
-/* Bullet-style memory of a pair's points, for the nearest-point policy. */
-typedef struct old_point { mk_vec3 local_a; mk_real ln, lt1, lt2; } old_point;
+/* Bullet-style memory of a pair's points, for the distance policies. */
+typedef struct old_point { mk_vec3 key; uint32_t features; mk_real ln, lt1, lt2; } old_point;
 typedef struct pair_state {
     mk_manifold_cache cache; /* SAT hysteresis, carried for every policy */
     int step;                /* last step the pair had points */
@@ -186,6 +191,7 @@ static void add_row(world *w, int ia, int ib, const mk_manifold *m, const mk_con
     r->ra = mk_v3_sub(mid, a->x.p);
     r->rb = mk_v3_sub(mid, b->x.p);
     r->local_a = c->local_a;
+    r->world = mid;
     r->kn = row_k(a, b, r->ra, r->rb, r->n);
     r->mn = 1 / r->kn;
     r->mt1 = 1 / row_k(a, b, r->ra, r->rb, r->t1);
@@ -236,20 +242,22 @@ static void warm_start(world *w)
             r->ln = imp.normal;
             r->lt1 = imp.tangent1;
             r->lt2 = imp.tangent2;
-        } else if (w->warm == WARM_NEAREST) {
+        } else if (w->warm != WARM_COLD) {
             pair_state *ps = &w->pairs[r->a * MAX_BODIES + r->b];
-            mk_real best = NEAREST_THRESHOLD * NEAREST_THRESHOLD;
+            mk_real best = w->warm == WARM_NEAREST ? NEAREST_THRESHOLD * NEAREST_THRESHOLD : MK_REAL_MAX;
+            mk_vec3 key = w->warm == WARM_NEAREST ? r->local_a : r->world;
             int pick = -1;
             if (ps->step != w->step - 1) continue;
             for (k = 0; k < ps->count; ++k) {
-                mk_real d2 = mk_v3_len2(mk_v3_sub(ps->pts[k].local_a, r->local_a));
+                mk_real d2 = mk_v3_len2(mk_v3_sub(ps->pts[k].key, key));
                 if (d2 < best) { best = d2; pick = k; }
             }
             if (pick < 0) continue;
             r->ln = ps->pts[pick].ln;
             r->lt1 = ps->pts[pick].lt1;
             r->lt2 = ps->pts[pick].lt2;
-            ps->pts[pick].local_a = mk_v3(MK_REAL_MAX, MK_REAL_MAX, MK_REAL_MAX); /* used: no second match */
+            r->wrong = ps->pts[pick].features != r->features;
+            ps->pts[pick].key = mk_v3(MK_REAL_MAX, MK_REAL_MAX, MK_REAL_MAX); /* used: no second match */
             r->matched = 1;
         }
         if (r->matched)
@@ -268,7 +276,7 @@ static void remember(world *w)
             imp.tangent1 = r->lt1;
             imp.tangent2 = r->lt2;
             mk_contact_cache_store(w->cache, mk_contact_id_make((uint32_t)r->a, (uint32_t)r->b, r->features), imp);
-        } else if (w->warm == WARM_NEAREST) {
+        } else if (w->warm != WARM_COLD) {
             pair_state *ps = &w->pairs[r->a * MAX_BODIES + r->b];
             old_point *o;
             if (ps->step != w->step) {
@@ -276,7 +284,8 @@ static void remember(world *w)
                 ps->count = 0;
             }
             o = &ps->pts[ps->count++];
-            o->local_a = r->local_a;
+            o->key = w->warm == WARM_NEAREST ? r->local_a : r->world;
+            o->features = r->features;
             o->ln = r->ln;
             o->lt1 = r->lt1;
             o->lt2 = r->lt2;
@@ -346,7 +355,7 @@ static void integrate(world *w)
     }
 }
 
-typedef struct step_stats { int iterations; mk_real residual, penetration; int points, matched; mk_status status; } step_stats;
+typedef struct step_stats { int iterations; mk_real residual, penetration; int points, matched, wrong; mk_status status; } step_stats;
 
 static step_stats step(world *w, int fixed_iterations)
 {
@@ -361,6 +370,7 @@ static step_stats step(world *w, int fixed_iterations)
     for (i = 0; i < w->nr; ++i) {
         s.penetration = mk_max(s.penetration, w->rows[i].depth);
         s.matched += w->rows[i].matched;
+        s.wrong += w->rows[i].wrong;
     }
     s.points = w->nr;
     if (fixed_iterations > 0) {
@@ -393,7 +403,7 @@ typedef struct scene {
 
 /* Catto 2005's boxes: 0.7 x 0.7 x 0.3 m, about 110 kg. */
 #define TOWER_HALF mk_v3(MK_REAL(0.35), MK_REAL(0.35), MK_REAL(0.15))
-#define TOWER_DENSITY MK_REAL(750)
+#define TOWER_DENSITY MK_REAL(750.0)
 
 static void build_tower(world *w)
 {
@@ -419,6 +429,16 @@ static void build_slide_spin(world *w)
     bd->w = mk_v3(0, 0, 8);
 }
 
+/* Seed 000's a/b/c/d: at 60 rad/s a box turns 57 degrees per step, so each
+ * corner lands nearer another corner's old place than its own. */
+static void build_spin_fast(world *w)
+{
+    body *bd;
+    add_ground(w);
+    bd = add_box(w, mk_v3(MK_REAL(0.5), MK_REAL(0.5), MK_REAL(0.25)), 500, mk_v3(0, 0, MK_REAL(0.25)));
+    bd->w = mk_v3(0, 0, 60);
+}
+
 static void build_pyramid(world *w)
 {
     int row_i, k;
@@ -434,6 +454,7 @@ static const scene scenes[] = {
     {"tower_drop", "the same tower released from exact contact", 5, MK_REAL(0.5), 0, 0, build_tower},
     {"heavy_on_light", "1000 kg box on a 10 kg box (1:100), at rest", 5, MK_REAL(0.5), 1, 1, build_heavy_on_light},
     {"slide_spin", "box sliding at 3 m/s, spinning at 8 rad/s, mu 0.2", MK_REAL(1.5), MK_REAL(0.2), 0, 1, build_slide_spin},
+    {"spin_fast", "box spinning in place at 60 rad/s (57 degrees a step), mu 0.2", MK_REAL(1.5), MK_REAL(0.2), 0, 1, build_spin_fast},
     {"pyramid", "55 unit boxes in 10 rows, at rest", 5, MK_REAL(0.5), 1, 0, build_pyramid},
 };
 
@@ -442,7 +463,7 @@ static const scene scenes[] = {
 typedef struct run_result {
     mk_status status;
     int steps;
-    double iters_mean, iters_p95, residual_mean, matched_frac, penetration, drift, ke_per_box, top_drop;
+    double iters_mean, iters_p95, residual_mean, matched_frac, wrong_frac, penetration, drift, ke_per_box, top_drop;
     int iters_max;
 } run_result;
 
@@ -454,7 +475,7 @@ static run_result run(const scene *sc, warm_mode warm, int fixed_iterations, int
     run_result res;
     int steps = (int)(sc->seconds / DT + MK_REAL(0.5)), s, i, dyn = 0, last_second = steps - (int)(1 / DT);
     int *iters = (int *)malloc(sizeof(int) * (size_t)steps);
-    double iters_sum = 0, residual_sum = 0, ke = 0, points = 0, matched = 0;
+    double iters_sum = 0, residual_sum = 0, ke = 0, points = 0, matched = 0, wrong = 0;
     mk_real top_z0;
     memset(&res, 0, sizeof res);
     memset(&w, 0, sizeof w);
@@ -486,6 +507,7 @@ static run_result run(const scene *sc, warm_mode warm, int fixed_iterations, int
         residual_sum += (double)st.residual;
         points += st.points;
         matched += st.matched;
+        wrong += st.wrong;
         if (s >= last_second) res.penetration = fmax(res.penetration, (double)st.penetration);
     }
     if (res.status != MK_OK) {
@@ -509,6 +531,7 @@ static run_result run(const scene *sc, warm_mode warm, int fixed_iterations, int
     res.iters_max = iters[steps - 1];
     res.residual_mean = residual_sum / steps;
     res.matched_frac = points > 0 ? matched / points : 0;
+    res.wrong_frac = matched > 0 ? wrong / matched : 0;
     res.ke_per_box = ke / dyn;
     res.top_drop = (double)(top_z0 - w.b[w.nb - 1].x.p.z);
     mk_contact_cache_destroy(w.cache);
@@ -521,11 +544,11 @@ static void json_line(FILE *f, const scene *sc, const char *variant, warm_mode w
     if (!f) return;
     fprintf(f,
             "{\"suite\":\"contacts\",\"case\":\"%s\",\"variant\":\"%s\",\"backend\":\"minko.%s\",\"n\":%d,"
-            "\"iters_mean\":%.3f,\"iters_p95\":%.0f,\"iters_max\":%d,\"residual_mean\":%.3g,\"warm_matched\":%.4f,"
+            "\"iters_mean\":%.3f,\"iters_p95\":%.0f,\"iters_max\":%d,\"residual_mean\":%.3g,\"warm_matched\":%.4f,\"warm_mismatched\":%.4f,"
             "\"max_penetration\":%.6g,\"drift\":%.6g,\"ke_end\":%.6g,\"top_drop\":%.6g,\"position_correction\":\"%s\","
             "\"precision\":\"%s\"}\n",
             sc->name, variant, warm_names[warm], r->steps, r->iters_mean, r->iters_p95, r->iters_max, r->residual_mean,
-            r->matched_frac, r->penetration, r->drift, r->ke_per_box, r->top_drop, split ? "split_impulse" : "baumgarte",
+            r->matched_frac, r->wrong_frac, r->penetration, r->drift, r->ke_per_box, r->top_drop, split ? "split_impulse" : "baumgarte",
             mk_is_double_precision() ? "double" : "single");
 }
 
@@ -554,8 +577,8 @@ int main(int argc, char **argv)
     for (k = 0; k < (int)(sizeof scenes / sizeof scenes[0]); ++k)
         if ((!only || !strcmp(only, scenes[k].name)) && (!quick || scenes[k].quick))
             printf("  %-15s %s\n", scenes[k].name, scenes[k].what);
-    printf("%-15s %-8s %-8s %9s %5s %5s %9s %7s %10s %9s %10s %9s\n", "scene", "mode", "warm", "iters", "p95", "max",
-           "residual", "matched", "max_pen", "drift", "KE/box", "top_drop");
+    printf("%-15s %-8s %-8s %9s %5s %5s %9s %7s %6s %10s %9s %10s %9s\n", "scene", "mode", "warm", "iters", "p95", "max",
+           "residual", "matched", "wrong", "max_pen", "drift", "KE/box", "top_drop");
     for (k = 0; k < (int)(sizeof scenes / sizeof scenes[0]); ++k) {
         const scene *sc = &scenes[k];
         if (only && strcmp(only, sc->name)) continue;
@@ -569,9 +592,9 @@ int main(int argc, char **argv)
                     mode = 2;
                     break;
                 }
-                printf("%-15s %-8s %-8s %9.2f %5.0f %5d %9.2e %6.1f%% %10.2e %9.2e %10.2e %9.2e\n", sc->name,
+                printf("%-15s %-8s %-8s %9.2f %5.0f %5d %9.2e %6.1f%% %5.1f%% %10.2e %9.2e %10.2e %9.2e\n", sc->name,
                        mode == 0 ? "pgs10" : "converge", warm_names[wm], r.iters_mean, r.iters_p95, r.iters_max,
-                       r.residual_mean, 100 * r.matched_frac, r.penetration, r.drift, r.ke_per_box, r.top_drop);
+                       r.residual_mean, 100 * r.matched_frac, 100 * r.wrong_frac, r.penetration, r.drift, r.ke_per_box, r.top_drop);
                 json_line(jf, sc, mode == 0 ? "pgs10" : "converge", wm, &r, split);
             }
         }

@@ -28,15 +28,17 @@ static int face_set(epa_poly *P, int f, int a, int b, int c)
     epa_face *F = &P->f[f];
     mk_vec3 wa = P->v[a].w, wb = P->v[b].w, wc = P->v[c].w;
     mk_vec3 n = mk_v3_cross(mk_v3_sub(wb, wa), mk_v3_sub(wc, wa));
-    mk_real l = mk_v3_len(n);
+    mk_real l2 = mk_v3_len2(n);
     F->v[0] = (short)a;
     F->v[1] = (short)b;
     F->v[2] = (short)c;
     F->live = 1;
-    if (!(l > 0)) return 0;
-    F->n = mk_v3_scale(n, 1 / l);
-    /* The mean over the three vertices does not favour one of them. */
-    F->dist = (mk_v3_dot(F->n, wa) + mk_v3_dot(F->n, wb) + mk_v3_dot(F->n, wc)) / 3;
+    if (!(l2 > 0)) return 0;
+    F->n = mk_v3_scale(n, 1 / mk_sqrt_(l2));
+    /* The plane through the centroid does not favour one vertex (a face's
+     * distance only ranks faces and stops the loop: the answer is
+     * re-evaluated by the support functions). */
+    F->dist = mk_v3_dot(F->n, mk_v3_add(mk_v3_add(wa, wb), wc)) * (MK_REAL(1.0) / 3);
     return F->dist >= -P->tol;
 }
 
@@ -52,24 +54,6 @@ static void link(epa_poly *P, int f, int i, int g, int j)
     P->f[f].edge[i] = (unsigned char)j;
     P->f[g].adj[j] = (short)f;
     P->f[g].edge[j] = (unsigned char)i;
-}
-
-/* Adjacency by matching each directed edge with its reverse among faces [lo, hi). */
-static int link_all(epa_poly *P, int lo, int hi)
-{
-    int f, i, g, j;
-    for (f = lo; f < hi; ++f)
-        for (i = 0; i < 3; ++i) {
-            int a = P->f[f].v[i], b = P->f[f].v[(i + 1) % 3], found = 0;
-            for (g = lo; g < hi && !found; ++g)
-                for (j = 0; j < 3 && !found; ++j)
-                    if (P->f[g].v[j] == b && P->f[g].v[(j + 1) % 3] == a) {
-                        link(P, f, i, g, j);
-                        found = 1;
-                    }
-            if (!found) return 0;
-        }
-    return 1;
 }
 
 /* Adds the support point farthest from the affine hull of t[0..n) among
@@ -135,6 +119,9 @@ static int blow_up(const mk_pair *p, const mk_simplex *s, mk_real tol, mk_cso_ve
 static int init_tetrahedron(epa_poly *P, const mk_cso_vertex *t)
 {
     static const int faces[4][3] = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+    /* For edge i of face k: the face across it and that edge's index there. */
+    static const int across[4][3][2] = {{{1, 2}, {3, 2}, {2, 0}}, {{2, 2}, {3, 0}, {0, 0}},
+                                        {{0, 2}, {3, 1}, {1, 0}}, {{1, 1}, {2, 1}, {0, 1}}};
     mk_vec3 e1 = mk_v3_sub(t[1].w, t[0].w), e2 = mk_v3_sub(t[2].w, t[0].w), e3 = mk_v3_sub(t[3].w, t[0].w);
     int k, ok = 1;
     P->nv = 4;
@@ -146,15 +133,23 @@ static int init_tetrahedron(epa_poly *P, const mk_cso_vertex *t)
         P->v[1] = t[2];
         P->v[2] = t[1];
     }
-    for (k = 0; k < 4; ++k) ok = face_set(P, k, faces[k][0], faces[k][1], faces[k][2]) && ok;
-    return ok && link_all(P, 0, 4);
+    for (k = 0; k < 4; ++k) {
+        int i;
+        ok = face_set(P, k, faces[k][0], faces[k][1], faces[k][2]) && ok;
+        for (i = 0; i < 3; ++i) link(P, k, i, across[k][i][0], across[k][i][1]);
+    }
+    return ok;
 }
 
+/* A plain minimum over every slot: removed faces carry dist = +inf (see
+ * expand), so the loop has no live test and keeps the best in a register
+ * instead of reloading it through the index it just picked. */
 static int nearest_face(const epa_poly *P)
 {
-    int f, best = -1;
-    for (f = 0; f < P->nf; ++f)
-        if (P->f[f].live && (best < 0 || P->f[f].dist < P->f[best].dist)) best = f;
+    int f, best = 0;
+    mk_real bd = P->f[0].dist;
+    for (f = 1; f < P->nf; ++f)
+        if (P->f[f].dist < bd) bd = P->f[f].dist, best = f;
     return best;
 }
 
@@ -205,7 +200,10 @@ static int expand(epa_poly *P, int f0, int wi)
         }
     }
     if (nh < 3) return 0;
-    for (k = 0; k < nr; ++k) P->free_faces[P->nfree++] = removed[k];
+    for (k = 0; k < nr; ++k) {
+        P->f[removed[k]].dist = (mk_real)HUGE_VAL; /* out of nearest_face's way until reused */
+        P->free_faces[P->nfree++] = removed[k];
+    }
     for (k = 0; k < nh; ++k) {
         int f = face_alloc(P);
         if (f < 0 || !face_set(P, f, hz_a[k], hz_b[k], wi)) return 0;
@@ -235,9 +233,8 @@ static void face_weights(const epa_poly *P, const epa_face *F, mk_real *l)
     for (k = 0; k < 3; ++k) l[k] = sum > 0 ? l[k] / sum : MK_REAL(1.0) / 3;
 }
 
-static void answer(const epa_poly *P, int f, mk_epa_result *out)
+static void answer(const epa_poly *P, const epa_face *F, mk_epa_result *out)
 {
-    const epa_face *F = &P->f[f];
     int k;
     for (k = 0; k < 3; ++k) out->face[k] = P->v[F->v[k]];
     face_weights(P, F, out->l);
@@ -266,6 +263,7 @@ static int flat_answer(const mk_pair *p, const mk_simplex *s, mk_epa_result *out
 int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
 {
     epa_poly P;
+    epa_face best;
     mk_cso_vertex t[4];
     int it;
     P.p = p;
@@ -274,13 +272,12 @@ int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *
     out->state = MK_SOLVE_MAX_ITERATIONS;
     for (it = 0;; ++it) {
         int f = nearest_face(&P);
-        const epa_face *F = &P.f[f];
         mk_cso_vertex w;
-        answer(&P, f, out);
+        best = P.f[f]; /* expand may reuse f's slot before it finds a defect */
         out->iterations = it + 1;
         if (P.nv == MK_EPA_MAX_VERTICES) break;
-        w = mk_pair_support(p, F->n, P.v[F->v[0]].ia, P.v[F->v[0]].ib);
-        if (known_vertex(&P, &w) || mk_v3_dot(F->n, w.w) - F->dist <= MK_GJK_REL_TOL * F->dist + P.tol) {
+        w = mk_pair_support(p, best.n, P.v[best.v[0]].ia, P.v[best.v[0]].ib);
+        if (known_vertex(&P, &w) || mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol) {
             out->state = MK_SOLVE_CONVERGED;
             break;
         }
@@ -290,5 +287,6 @@ int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *
             break;
         }
     }
+    answer(&P, &best, out);
     return 0;
 }

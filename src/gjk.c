@@ -239,7 +239,7 @@ MK_ALWAYS_INLINE void gjk_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type
     for (iter = 0; iter < MK_GJK_MAX_ITERATIONS; ++iter) {
         mk_cso_vertex w;
         mk_vec3 d;
-        mk_real dn, lo, u, w2, tol_abs = MK_GJK_ABS_TOL * scale;
+        mk_real dd, lo, u, w2, tol_abs = MK_GJK_ABS_TOL * scale;
         if (s->n == 4 || sol.vv <= tol_abs * tol_abs) { /* origin inside, or on the simplex to rounding */
             overlap = 1;
             state = MK_SOLVE_CONVERGED;
@@ -253,13 +253,16 @@ MK_ALWAYS_INLINE void gjk_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type
         }
         /* A direction that does not point at the origin side of v is rounding noise. */
         d = mk_v3_dot(sol.d, sol.v) < 0 ? sol.d : mk_v3_neg(sol.v);
-        dn = mk_v3_len(d);
-        if (!(dn > 0)) {
+        dd = mk_v3_len2(d);
+        if (!(dd > 0)) {
             state = MK_SOLVE_DEGENERATE;
             break;
         }
-        d = mk_v3_scale(d, 1 / dn);
+        /* Supports are scale-free, so the search runs on d as it is and the
+         * square root and division of the unit normal below overlap it
+         * instead of delaying it. */
         w = mk_pair_support_typed(p, ta, tb, d, ha, hb);
+        d = mk_v3_scale(d, 1 / mk_sqrt_(dd));
         ha = w.ia;
         hb = w.ib;
         w2 = mk_v3_len2(w.w);

@@ -990,17 +990,53 @@ static void breadth_first_faces(qh *q, int *order, int nf)
     }
 }
 
+static int scan_support(const mk_hull *h, mk_vec3 dir)
+{
+    int v, best = 0;
+    mk_real best_d = mk_v3_dot(dir, h->vertices[0]);
+    for (v = 1; v < h->vertex_count; ++v) {
+        mk_real d = mk_v3_dot(dir, h->vertices[v]);
+        if (d > best_d) best = v, best_d = d;
+    }
+    return best;
+}
+
+/* The neighbour lists the support walk reads: each vertex's fan, in ring
+ * order, as one contiguous run of vertex indices (CSR), so its neighbours'
+ * loads are independent instead of a chain of half-edge hops. */
+static void fill_adjacency(const mk_hull *h, uint16_t *adj)
+{
+    int v, k = h->vertex_count + 1, axis;
+    for (v = 0; v < h->vertex_count; ++v) {
+        int e0 = h->vertex_edge[v], e = e0;
+        adj[v] = (uint16_t)k;
+        do {
+            const mk_hull_edge *t = &h->edges[h->edges[e].twin];
+            adj[k++] = t->origin;
+            e = t->next;
+        } while (e != e0);
+    }
+    adj[v] = (uint16_t)k;
+    /* Then the vertices extreme along +x, -x, +y, -y, +z, -z: a cold walk
+     * starts from the best of them instead of wherever vertex 0 lies. */
+    for (axis = 0; axis < 6; ++axis) {
+        mk_real s = axis & 1 ? -1 : 1;
+        mk_vec3 d = mk_v3(axis / 2 == 0 ? s : 0, axis / 2 == 1 ? s : 0, axis / 2 == 2 ? s : 0);
+        adj[k + axis] = (uint16_t)scan_support(h, d);
+    }
+}
+
 /* Compacts the live mesh into one block: faces in breadth-first order, each
  * face's half-edges contiguous in loop order, vertices in input order. */
 static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *al, int *vmap, int *emap,
                       int *vout, mk_hull **out)
 {
     int nv = 0, ne = 0, nf = 0, i, f, e;
-    size_t off_planes, off_verts, off_edges, off_fe, off_ve, bytes;
+    size_t off_planes, off_verts, off_edges, off_fe, off_ve, off_adj, bytes;
     unsigned char *blk;
     mk_hull *h;
     mk_hull_edge *edges;
-    uint16_t *fe, *ve;
+    uint16_t *fe, *ve, *adj;
     int *order = q->members;
     for (i = 0; i < q->n; ++i) vmap[i] = -1;
     for (f = 0; f < q->f_top; ++f) {
@@ -1024,7 +1060,10 @@ static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *
     off_edges = align_up(off_verts + (size_t)nv * sizeof(mk_vec3), 8);
     off_fe = off_edges + (size_t)ne * sizeof(mk_hull_edge);
     off_ve = off_fe + (size_t)nf * sizeof(uint16_t);
-    bytes = off_ve + (size_t)nv * sizeof(uint16_t);
+    off_adj = off_ve + (size_t)nv * sizeof(uint16_t);
+    /* nv + 1 offsets, one neighbour per half-edge, six axis-extreme vertices:
+     * 7 nv - 5 entries at most, well inside uint16_t */
+    bytes = off_adj + (size_t)(nv + 1 + ne + 6) * sizeof(uint16_t);
     blk = (unsigned char *)al->alloc(al->ctx, bytes, 16);
     if (!blk) return MK_ERR_OUT_OF_MEMORY;
     memset(blk, 0, bytes);
@@ -1032,6 +1071,7 @@ static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *
     edges = (mk_hull_edge *)(blk + off_edges);
     fe = (uint16_t *)(blk + off_fe);
     ve = (uint16_t *)(blk + off_ve);
+    adj = (uint16_t *)(blk + off_adj);
     h->vertex_count = nv;
     h->edge_count = ne;
     h->face_count = nf;
@@ -1040,6 +1080,7 @@ static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *
     h->edges = edges;
     h->face_edge = fe;
     h->vertex_edge = ve;
+    h->adjacency = adj;
     h->tolerance = (mk_real)q->tol;
     h->allocator = *al;
     h->bytes = bytes;
@@ -1070,6 +1111,7 @@ static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *
             e = q->e[e].next;
         } while (e != q->f[f].edge);
     }
+    if (nf == h->face_count) fill_adjacency(h, adj);
     if (nf != h->face_count || !hull_geometry(h, q->p, centre, vout)) {
         al->free(al->ctx, blk, bytes);
         return MK_ERR_DEGENERATE;
@@ -1187,37 +1229,24 @@ void mk_hull_destroy(mk_hull *hull)
 
 /* ---- support ------------------------------------------------------------------- */
 
-static int scan_support(const mk_hull *h, mk_vec3 dir)
-{
-    int v, best = 0;
-    mk_real best_d = mk_v3_dot(dir, h->vertices[0]);
-    for (v = 1; v < h->vertex_count; ++v) {
-        mk_real d = mk_v3_dot(dir, h->vertices[v]);
-        if (d > best_d) best = v, best_d = d;
-    }
-    return best;
-}
-
-/* Walk uphill over the edges from `best` until no neighbour is higher. */
+/* Steepest ascent from `best` until no neighbour is higher. The neighbours
+ * of a vertex are one contiguous run (h->adjacency), so their dot products
+ * are independent loads the CPU overlaps, and taking the highest of them
+ * shortens the path; moving only on a strict increase cannot loop. */
 static int climb(const mk_hull *h, mk_vec3 dir, int best, mk_real *best_d)
 {
-    int moved = 1;
-    while (moved) {
-        int e0 = h->vertex_edge[best], e = e0;
-        moved = 0;
-        do {
-            const mk_hull_edge *t = &h->edges[h->edges[e].twin];
-            mk_real d = mk_v3_dot(dir, h->vertices[t->origin]);
-            if (d > *best_d) {
-                best = t->origin;
-                *best_d = d;
-                moved = 1;
-                break;
-            }
-            e = t->next;
-        } while (e != e0);
+    const uint16_t *adj = h->adjacency;
+    for (;;) {
+        int k, end = adj[best + 1], next = best;
+        mk_real nd = *best_d;
+        for (k = adj[best]; k < end; ++k) {
+            mk_real d = mk_v3_dot(dir, h->vertices[adj[k]]);
+            if (d > nd) next = adj[k], nd = d;
+        }
+        if (next == best) return best;
+        best = next;
+        *best_d = nd;
     }
-    return best;
 }
 
 /* A vertex higher than best on one of the faces around it, or -1. The two
@@ -1235,6 +1264,19 @@ static int higher_on_faces(const mk_hull *h, mk_vec3 dir, int best, mk_real best
     return -1;
 }
 
+/* The best of the six axis-extreme vertices stored after the neighbour lists. */
+static int cold_start(const mk_hull *h, mk_vec3 dir, mk_real *best_d)
+{
+    const uint16_t *x = h->adjacency + h->adjacency[h->vertex_count];
+    int k, best = x[0];
+    *best_d = mk_v3_dot(dir, h->vertices[best]);
+    for (k = 1; k < 6; ++k) {
+        mk_real d = mk_v3_dot(dir, h->vertices[x[k]]);
+        if (d > *best_d) best = x[k], *best_d = d;
+    }
+    return best;
+}
+
 /* A vertex of a convex polytope that no neighbour beats along dir is a global
  * maximum (the simplex-method argument), so walking uphill over the vertex
  * graph finds the support in O(path length) instead of O(V). Ties do not
@@ -1242,17 +1284,23 @@ static int higher_on_faces(const mk_hull *h, mk_vec3 dir, int best, mk_real best
  * the construction tolerance, and a vertex that is a hair reflex in a long
  * face can stop the walk while the face's far end is much higher; so a walk
  * that stops also looks at every vertex of the faces around it, and goes on
- * from there if one is higher. Below MK_HULL_SCAN_MAX vertices a plain scan
- * of the contiguous vertex array is cheaper than chasing edges. */
+ * from there if one is higher (only on hulls with faces of four or more
+ * vertices: a triangle holds nothing but neighbours). Below MK_HULL_SCAN_MAX
+ * vertices a plain scan of the contiguous vertex array is cheaper. */
 int mk_hull_support_index(const mk_hull *h, mk_vec3 dir, int start)
 {
-    int best, up;
+    int best, up, all_triangles = h->face_count == 2 * h->vertex_count - 4; /* Euler: F = 2V - 4 */
     mk_real best_d;
     if (h->vertex_count <= MK_HULL_SCAN_MAX) return scan_support(h, dir);
-    best = (start >= 0 && start < h->vertex_count) ? start : 0;
-    best_d = mk_v3_dot(dir, h->vertices[best]);
+    if (start >= 0 && start < h->vertex_count) {
+        best = start;
+        best_d = mk_v3_dot(dir, h->vertices[best]);
+    } else {
+        best = cold_start(h, dir, &best_d);
+    }
     for (;;) {
         best = climb(h, dir, best, &best_d);
+        if (all_triangles) return best; /* a vertex's faces hold only its neighbours */
         up = higher_on_faces(h, dir, best, best_d);
         if (up < 0) return best;
         best = up;

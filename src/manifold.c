@@ -237,6 +237,35 @@ static void face_axis(const mk_hull *ha, const mk_hull *hb, const mk_pair *p, mk
     }
 }
 
+/* The same for two boxes, without their hull views: an edge axis is a face
+ * axis when the normal is one of A's axes (faces of A first, as SAT breaks
+ * ties) or one of B's; the face is the one the normal leaves A through, or
+ * enters B through. */
+static void box_face_axis(const mk_pair *p, mk_sat_result *sat)
+{
+    mk_real one = 1 - 64 * MK_REAL_EPSILON, n[3], nb[3];
+    mk_vec3 l = mk_mat3_tmul_v3(p->r, sat->normal);
+    int k;
+    n[0] = sat->normal.x, n[1] = sat->normal.y, n[2] = sat->normal.z;
+    nb[0] = l.x, nb[1] = l.y, nb[2] = l.z;
+    for (k = 0; k < 3; ++k) {
+        if (mk_fabs_(n[k]) >= one) {
+            sat->kind = MK_SAT_FACE_A;
+            sat->a = 2 * k + (n[k] > 0);
+            sat->b = -1;
+            return;
+        }
+    }
+    for (k = 0; k < 3; ++k) {
+        if (mk_fabs_(nb[k]) >= one) {
+            sat->kind = MK_SAT_FACE_B;
+            sat->a = -1;
+            sat->b = 2 * k + (nb[k] < 0);
+            return;
+        }
+    }
+}
+
 static mk_real min3(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
 
 /* The reference face `face` of polytope s (box or hull), in its own frame. */
@@ -263,6 +292,36 @@ static mk_feature polytope_edge(const mk_shape *s, int e, mk_vec3 *e0, mk_vec3 *
     }
 }
 
+/* Cores apart (rounded or speculative polytopes): SAT's separation is only a
+ * lower bound of their distance, reached when the points built along the
+ * axis realise it (a face over a face, two edges crossing inside both). If
+ * they fall short of it (two cube edges side by side: the face axes
+ * separate by less than the edges are apart, and the faces' clip is empty),
+ * the exact core distance comes from GJK instead. */
+#ifndef MK_WITHOUT_GJK
+static mk_real polytope_size(const mk_shape *s)
+{
+    return s->radius + (s->type == MK_SHAPE_BOX ? mk_v3_max_abs(s->u.half_extents) : s->u.hull->outer_radius);
+}
+
+static int realised(const mk_mf *m, mk_real depth, const mk_pair *p)
+{
+    mk_real tol = 256 * MK_REAL_EPSILON * (mk_v3_max_abs(p->t) + polytope_size(p->a) + polytope_size(p->b));
+    int i;
+    for (i = 0; i < m->count; ++i)
+        if (m->p[i].depth >= depth - tol) return 1;
+    return 0;
+}
+
+static mk_status generic(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache);
+
+static mk_status apart(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
+{
+    m->count = 0;
+    return generic(p, m, cache);
+}
+#endif
+
 /* Two polytopes (boxes, hulls): SAT (src/sat.h; the 15-axis closed form for
  * two boxes), then a face axis clips the incident face against the
  * reference face and an edge axis gives the closest points of the two
@@ -283,22 +342,27 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     int boxes = a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX;
     opt.prefer_abs = MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
                                                 b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
-    if (boxes) mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p->r, p->t, &opt, &sat);
-    /* Boxes enter the general SAT (and the face check below) as mk_box_hull
-     * views: O(1), no allocation, the same indices as the 15-axis form. */
-    if (a->type == MK_SHAPE_BOX && (!boxes || sat.kind == MK_SAT_EDGES)) {
-        mk_box_hull_init(&va, a->u.half_extents);
-        ha = &va.hull;
+    if (boxes) {
+        mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p->r, p->t, &opt, &sat);
+        if (sat.kind == MK_SAT_EDGES) box_face_axis(p, &sat);
+    } else {
+        /* A box meets a hull as its mk_box_hull view: O(1), no allocation,
+         * the same indices as the 15-axis form. */
+        if (a->type == MK_SHAPE_BOX) {
+            mk_box_hull_init(&va, a->u.half_extents);
+            ha = &va.hull;
+        }
+        if (b->type == MK_SHAPE_BOX) {
+            mk_box_hull_init(&vb, b->u.half_extents);
+            hb = &vb.hull;
+        }
+        mk_sat(ha, hb, &p->r, p->t, &opt, &sat);
+        if (sat.kind == MK_SAT_EDGES) face_axis(ha, hb, p, &sat);
     }
-    if (b->type == MK_SHAPE_BOX && (!boxes || sat.kind == MK_SAT_EDGES)) {
-        mk_box_hull_init(&vb, b->u.half_extents);
-        hb = &vb.hull;
-    }
-    if (!boxes) mk_sat(ha, hb, &p->r, p->t, &opt, &sat);
-    if (sat.kind == MK_SAT_EDGES) face_axis(ha, hb, p, &sat);
     if (cache) cache->axis = sat.best - ra - rb > m->margin ? MK_SAT_NONE : (int)sat.kind;
     if (sat.best - ra - rb > m->margin) return MK_OK;
     m->normal = sat.normal;
+    m->cores_apart = sat.separation > 0;
     if (sat.kind == MK_SAT_FACE_A) {
         polytope_face(a, sat.a, &ref);
         mk_support_feature(b, mk_mat3_tmul_v3(p->r, mk_v3_neg(sat.normal)), &inc);
@@ -310,14 +374,20 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
         mk_support_feature(a, sat.normal, &inc);
         mk_mf_clip(m, &ref, 0, &inc, ra, rb);
     } else {
-        mk_vec3 a0, a1, b0, b1;
-        mk_real s, t;
+        mk_vec3 a0, a1, b0, b1, qa;
+        mk_real s, t, gap = sat.separation;
         mk_feature fa = polytope_edge(a, sat.a, &a0, &a1), fb = polytope_edge(b, sat.b, &b0, &b1);
         b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
         b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
         mk_segment_segment(a0, a1, b0, b1, &s, &t);
-        mk_mf_add(m, mk_v3_mad(mk_v3_lerp(a0, a1, s), ra, sat.normal), ra + rb - sat.separation, fa, fb);
+        qa = mk_v3_lerp(a0, a1, s);
+        /* Apart, the edges' closest points are a gap only if neither end clamped. */
+        if (gap > 0) gap = mk_v3_dist(qa, mk_v3_lerp(b0, b1, t));
+        mk_mf_add(m, mk_v3_mad(qa, ra, sat.normal), ra + rb - gap, fa, fb);
     }
+#ifndef MK_WITHOUT_GJK
+    if (sat.separation > 0 && !realised(m, ra + rb - sat.separation, p)) return apart(p, m, cache);
+#endif
     return MK_OK;
 }
 
@@ -361,15 +431,17 @@ static pair_fn pair_table(mk_shape_type ta, mk_shape_type tb)
 
 static mk_status check_transform(mk_transform x)
 {
+    /* A finite sum means four finite components (an infinite or NaN one
+     * would make it infinite or NaN). */
     if (!mk_v3_is_valid(x.p) || !mk_real_is_valid(x.q.x + x.q.y + x.q.z + x.q.w)) return MK_ERR_NOT_FINITE;
-    return mk_quat_is_valid(x.q) ? MK_OK : MK_ERR_BAD_ROTATION;
+    return mk_fabs_(mk_quat_len2(x.q) - 1) <= MK_QUAT_TOLERANCE ? MK_OK : MK_ERR_BAD_ROTATION;
 }
 
 /* Moves the reduced manifold from A's frame to world space; `swap` mirrors
  * it when the pair routine ran with the shapes exchanged. */
-static void finish(const mk_mf *m, mk_transform xa, const mk_pair *pair, int swap, mk_manifold *out)
+static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair *pair, int swap, mk_manifold *out)
 {
-    mk_mat3 R = mk_mat3_from_quat(xa.q); /* once, then 9 multiplications per point instead of a quaternion rotation */
+    mk_mat3 R = *ra;
     mk_vec3 n = mk_mat3_mul_v3(R, m->normal);
     int i;
     out->normal = swap ? mk_v3_neg(n) : n;
@@ -378,7 +450,7 @@ static void finish(const mk_mf *m, mk_transform xa, const mk_pair *pair, int swa
         const mk_mf_point *p = &m->p[i];
         mk_contact_point *c = &out->points[i];
         mk_vec3 pb = mk_v3_mad(p->pa, -p->depth, m->normal);
-        mk_vec3 wa = mk_v3_add(mk_mat3_mul_v3(R, p->pa), xa.p), wb = mk_v3_add(mk_mat3_mul_v3(R, pb), xa.p);
+        mk_vec3 wa = mk_v3_add(mk_mat3_mul_v3(R, p->pa), pa), wb = mk_v3_add(mk_mat3_mul_v3(R, pb), pa);
         mk_vec3 lb = mk_mat3_tmul_v3(pair->r, mk_v3_sub(pb, pair->t));
         c->depth = p->depth;
         c->flags = p->depth < 0 ? MK_CONTACT_SPECULATIVE : 0;
@@ -405,6 +477,7 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     pair_fn fn;
     int swap = 0;
     mk_pair p;
+    mk_mat3 ra;
     mk_mf m;
     if (!a || !b || !out) return MK_ERR_NULL;
     if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
@@ -425,14 +498,16 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
         xa = xb;
         xb = tx;
     }
-    xa.q = mk_quat_normalize(xa.q);
-    xb.q = mk_quat_normalize(xb.q);
-    p = mk_pair_make(a, xa, b, xb);
+    /* A's rotation once, exact for any accepted quaternion (gjk.h): it builds
+     * the pair and takes the manifold back to world space. */
+    ra = mk_rotation_of(xa.q);
+    p = mk_pair_in(a, ra, xa.p, b, xb);
     m.count = 0;
     m.margin = margin;
+    m.cores_apart = 0;
     m.normal = mk_v3(0, 0, 1);
     if ((st = fn(&p, &m, cache)) != MK_OK) return st;
     mk_mf_reduce(&m);
-    finish(&m, xa, &p, swap, out);
+    finish(&m, &ra, xa.p, &p, swap, out);
     return MK_OK;
 }

@@ -49,6 +49,7 @@ typedef struct mk_mf_point {
 typedef struct mk_mf {
     mk_vec3 normal;   /* unit, from A towards B */
     mk_real margin;   /* candidates with depth < -margin are dropped */
+    int cores_apart;  /* set before clipping: rounded cores apart clip without slop (clip.c) */
     int count;
     mk_mf_point p[MK_MF_MAX];
 } mk_mf;

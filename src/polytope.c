@@ -14,6 +14,13 @@ static const mk_hull_edge box_edges[24] = {
 };
 static const uint16_t box_face_edge[6] = {0, 4, 8, 12, 16, 20};
 static const uint16_t box_vertex_edge[8] = {3, 4, 2, 5, 0, 7, 1, 6};
+/* Corner i's neighbours differ from it in one bit (one axis); then corners
+ * extreme along +x, -x, +y, -y, +z, -z. */
+static const uint16_t box_adjacency[9 + 24 + 6] = {
+    9, 12, 15, 18, 21, 24, 27, 30, 33,
+    1, 2, 4,  0, 3, 5,  3, 0, 6,  2, 1, 7,  5, 6, 0,  4, 7, 1,  7, 4, 2,  6, 5, 3,
+    1, 0, 2, 0, 4, 0,
+};
 static const unsigned char box_edge_id[24] = {6, 10, 4, 8, 5, 11, 7, 9, 9, 2, 8, 0, 10, 3, 11, 1, 1, 5, 0, 4, 2, 7, 3, 6};
 
 void mk_box_hull_init(mk_box_hull *b, mk_vec3 h)
@@ -34,6 +41,7 @@ void mk_box_hull_init(mk_box_hull *b, mk_vec3 h)
     x->face_edge = box_face_edge;
     x->planes = b->p;
     x->vertex_edge = box_vertex_edge;
+    x->adjacency = box_adjacency;
     x->centroid = mk_v3_zero();
     x->inner_radius = mk_min(h.x, mk_min(h.y, h.z));
     x->outer_radius = mk_v3_len(h);

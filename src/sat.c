@@ -1,5 +1,6 @@
 /* sat.c: separating-axis test for convex polytopes (see sat.h). */
 #include "sat.h"
+#include "shape_internal.h"
 
 /* Edge pairs closer to parallel than this (as the sine of their angle) are
  * skipped: their cross product has no reliable direction, and the faces on
@@ -302,6 +303,38 @@ static int box_edge(int axis, const mk_real *s)
 
 static mk_vec3 v3a(const mk_real *v) { return mk_v3(v[0], v[1], v[2]); }
 
+/* sep / sqrt(l2) > best, without the square root and division: an edge axis
+ * seldom wins, so only the winners pay for normalising. Rounding may split a
+ * near-tie the other way, which only picks an axis of equal separation. */
+MK_ALWAYS_INLINE int beats(mk_real sep, mk_real l2, mk_real best)
+{
+    mk_real s2 = sep * sep, b2l = best * best * l2;
+    if (sep > 0) return best < 0 || s2 > b2l;
+    return best < 0 && s2 < b2l;
+}
+
+/* Edge pair (e_i of A, R_j of B): axis L = e_i x R_j = (0, -R_i2j, R_i1j) in
+ * the cyclic order (i, i1, i2), skipped when the edges are nearly parallel.
+ * A's extent along L is |R_i2j| a_i1 + |R_i1j| a_i2; B's is
+ * sum_k |(R^T L)_k| b_k, from the products rather than the cofactor identity
+ * of a rotation, which the rounded R satisfies only to a few ulps (and the
+ * division by a small |L| would magnify). */
+MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i,
+                                    int j, sat_axis *best)
+{
+    int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+    mk_real l2 = r[i1][j] * r[i1][j] + r[i2][j] * r[i2][j], sep;
+    if (!(l2 > SAT_PARALLEL * SAT_PARALLEL)) return;
+    sep = mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]) -
+          mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] -
+          mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
+    if (beats(sep, l2, best->sep)) {
+        best->sep = sep / mk_sqrt_(l2);
+        best->a = i;
+        best->b = j;
+    }
+}
+
 /* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
  * frame), so every axis below is a few multiply-adds on scalars. */
 void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
@@ -331,30 +364,19 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
         offer(&c, &c.face_b, mk_fabs_(dj) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]), -1, 2 * j + (dj < 0),
               mk_v3(s * r[0][j], s * r[1][j], s * r[2][j]));
     }
-    /* Edge pairs: axis L = e_i x R_j = (0, -R_i2j, R_i1j) in the cyclic
-     * order (i, i1, i2), skipped when the edges are nearly parallel. A's
-     * extent along L is |R_i2j| a_i1 + |R_i1j| a_i2; B's is sum_k |(R^T L)_k|
-     * b_k, from the products rather than the cofactor identity of a rotation,
-     * which the rounded R satisfies only to a few ulps (and the division by a
-     * small |L| would magnify). Only the winner's normal and features are
-     * worked out. */
-    for (i = 0; i < 3 && !c.stopped; ++i) {
-        int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-        for (j = 0; j < 3 && !c.stopped; ++j) {
-            int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-            mk_real l2 = r[i1][j] * r[i1][j] + r[i2][j] * r[i2][j], sep;
-            if (!(l2 > SAT_PARALLEL * SAT_PARALLEL)) continue;
-            sep = mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]) -
-                  mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] -
-                  mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
-            sep /= mk_sqrt_(l2);
-            if (sep > c.edges.sep) {
-                c.edges.sep = sep;
-                c.edges.a = i;
-                c.edges.b = j;
-                if (sep > c.stop) c.stopped = 1;
-            }
-        }
+    /* Edge pairs: only the winner's normal and features are worked out. */
+    if (!c.stopped) {
+        /* Spelled out: with constant indices the axes' terms stay in registers. */
+        box_edge_axis(r, ar, a, b, d, 0, 0, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 0, 1, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 0, 2, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 1, 0, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 1, 1, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 1, 2, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 2, 0, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 2, 1, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 2, 2, &c.edges);
+        if (c.edges.sep > c.stop) c.stopped = 1;
     }
     if (c.edges.a >= 0) {
         /* L = e_i x R_j pointing from A to B; A's supporting edge sits at the

@@ -24,7 +24,7 @@
  * and tests their edges with the Gauss-map (Minkowski face) test of
  * Gregorius (GDC 2013); an arc whose signs are too close to call (parallel
  * faces) is instead tested against all of A's edges, O(E_A). Measured
- * (demos/bench_sat, valgrind instruction counts): box-box 1.4k instructions
+ * (demos/bench_sat, valgrind instruction counts): box-box 1.1k instructions
  * by mk_sat_box_box, 15k by mk_sat on box views; hulls of 8/32/128 points
  * 28k/162k/730k. Minko's GJK + EPA answers hull pairs faster (see the
  * benchmark); SAT's value there is its feature output and hysteresis.

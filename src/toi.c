@@ -28,10 +28,19 @@ mk_status mk_sweep_validate(const mk_sweep *sw)
     return angle_ok(sw->rotation) ? MK_OK : MK_ERR_BAD_ARGUMENT;
 }
 
+/* Orientation at t of a body that turns by `angle` about the unit `axis`
+ * (zero: no turn) over the step, from the unit q0. */
+static mk_quat rotation_at(mk_vec3 axis, mk_real angle, mk_quat q0, mk_real t)
+{
+    double h = 0.5 * (double)(t * angle);
+    mk_real s = (mk_real)sin(h);
+    return mk_quat_mul(mk_quat_make(axis.x * s, axis.y * s, axis.z * s, (mk_real)cos(h)), q0);
+}
+
 /* Orientation at t: the step's rotation, scaled by t, applied after q0. */
 static mk_quat sweep_rotation(const mk_sweep *sw, mk_real t)
 {
-    return mk_quat_mul(mk_quat_from_axis_angle(sw->rotation, t * mk_v3_len(sw->rotation)), mk_quat_normalize(sw->q0));
+    return rotation_at(mk_v3_normalize(sw->rotation), mk_v3_len(sw->rotation), mk_quat_normalize(sw->q0), t);
 }
 
 static mk_transform sweep_pose(const mk_sweep *sw, mk_real t)
@@ -197,6 +206,9 @@ typedef struct toi_body {
     mk_vec3 dc;    /* c1 - c0 */
     mk_vec3 w;     /* rotation over the step */
     mk_real rho;   /* bounding radius about the rotation centre */
+    mk_vec3 axis;  /* the turn, split once so that each time costs one sin and one cos: */
+    mk_real angle; /* unit axis (zero: none), angle over the step, */
+    mk_quat q0;    /* unit orientation at t = 0 */
     mk_quat q;     /* orientation at the time being expanded */
     mk_mat3 R;     /* the same as a matrix */
     mk_vec3 c;     /* rotation centre at that time, relative to A's c0 */
@@ -221,12 +233,14 @@ static void body_init(toi_body *b, const mk_shape *s, const mk_sweep *sw, mk_vec
     b->w = s->type == MK_SHAPE_PLANE ? mk_v3_zero() : sw->rotation;
     b->rho = s->type == MK_SHAPE_PLANE ? 0 : bounding_radius(s, sw->local_center);
     b->c = mk_v3_sub(sw->c0, origin);
-    b->q = mk_quat_normalize(sw->q0);
+    b->angle = mk_v3_len(sw->rotation);
+    b->axis = b->angle > 0 ? mk_v3_scale(sw->rotation, 1 / b->angle) : mk_v3_zero();
+    b->q0 = b->q = mk_quat_normalize(sw->q0);
     b->R = mk_mat3_from_quat(b->q);
     b->hint = -1;
     /* A turn that moves no point by more than the rounding of the coordinates
      * (equal start and end orientations up to renormalisation) is no turn. */
-    b->turning = mk_v3_len(b->w) * b->rho > 8 * MK_REAL_EPSILON * (b->rho + mk_v3_max_abs(sw->c0));
+    b->turning = s->type != MK_SHAPE_PLANE && b->angle * b->rho > 8 * MK_REAL_EPSILON * (b->rho + mk_v3_max_abs(sw->c0));
     if (s->type == MK_SHAPE_PLANE)
         b->foot = mk_v3_scale(mk_mat3_mul_v3(b->R, s->u.plane.normal), s->u.plane.offset - mk_v3_dot(s->u.plane.normal, sw->local_center));
 }
@@ -234,7 +248,7 @@ static void body_init(toi_body *b, const mk_shape *s, const mk_sweep *sw, mk_vec
 static void body_at(toi_body *b, mk_real t, mk_vec3 origin)
 {
     if (b->turning) {
-        b->q = sweep_rotation(b->sw, t);
+        b->q = rotation_at(b->axis, b->angle, b->q0, t);
         b->R = mk_mat3_from_quat(b->q);
     }
     b->c = mk_v3_mad(mk_v3_sub(b->sw->c0, origin), t, b->dc);
@@ -248,7 +262,7 @@ static mk_transform body_pose(const toi_body *b, mk_vec3 origin) { return mk_tra
 /* Support point of the solid along world direction m (not unit), as an
  * offset from the rotation centre. A plane cannot turn and is only ever
  * asked along its outward normal: the answer is the foot of the centre. */
-static mk_vec3 support_rel(toi_body *b, mk_vec3 m)
+MK_ALWAYS_INLINE mk_vec3 support_rel(toi_body *b, mk_vec3 m)
 {
     mk_vec3 p, w;
     mk_real l;

@@ -181,18 +181,31 @@ static void check_hull(const mk_hull *h, const mk_vec3 *pts, int n, int coplanar
     ck_assert_int_eq(total, h->edge_count); /* every half-edge in exactly one loop */
 
     /* Vertex fans: vertex_edge leaves its vertex and the fan closes over all its
-     * edges; a vertex touches at least three faces (no redundant vertices). */
+     * edges; a vertex touches at least three faces (no redundant vertices).
+     * The adjacency lists (what the support walk reads) are the fans' far
+     * ends, in fan order, back to back. */
+    CHECK(h->adjacency[0] == h->vertex_count + 1);
     for (v = 0; v < h->vertex_count; ++v) {
         int e0 = h->vertex_edge[v], k = 0;
         CHECK(h->edges[e0].origin == v);
+        CHECK(h->adjacency[v + 1] - h->adjacency[v] == deg[v]);
         e = e0;
         do {
             CHECK(h->edges[e].origin == v);
+            CHECK(h->adjacency[h->adjacency[v] + k] == h->edges[h->edges[e].twin].origin);
             e = h->edges[h->edges[e].twin].next;
             ++k;
         } while (e != e0 && k <= h->edge_count);
         CHECK(k == deg[v]);
         CHECK(k >= 3);
+    }
+    CHECK(h->adjacency[h->vertex_count] == h->vertex_count + 1 + h->edge_count);
+    for (i = 0; i < 6; ++i) { /* the axis-extreme vertices after the lists */
+        mk_real s = i & 1 ? -1 : 1;
+        mk_vec3 d = mk_v3(i / 2 == 0 ? s : 0, i / 2 == 1 ? s : 0, i / 2 == 2 ? s : 0);
+        int x = h->adjacency[h->adjacency[h->vertex_count] + i];
+        CHECK(x >= 0 && x < h->vertex_count);
+        for (v = 0; v < h->vertex_count; ++v) CHECK(mk_v3_dot(d, h->vertices[v]) <= mk_v3_dot(d, h->vertices[x]));
     }
 
     /* Every input point is inside every face plane. */

@@ -894,6 +894,121 @@ START_TEST(hull_random_exact_depth)
 END_TEST
 
 
+/* Rounded polytopes (hulls and boxes grown by a radius, as Bullet's margins
+ * make them) and capsules against hulls, at poses where the cores are apart
+ * but the rounded solids overlap: there SAT's separation is only a lower
+ * bound of the core distance (two cube edges side by side), and the depth
+ * must come from the exact core distance. The deepest point must match the
+ * brute-force oracle, cold and warm; first the probe of the Bullet adapter. */
+START_TEST(rounded_polytopes_exact)
+{
+    mk_rng r = {41};
+    mk_vec3 pts[24];
+    mk_hull *cube, *hb;
+    mk_shape shapes[4];
+    mk_oracle_shape os[4], core[4];
+    mk_manifold m;
+    mk_manifold_cache cache;
+    int i, k, n = 0;
+    for (k = 0; k < 8; ++k) pts[k] = corner(mk_v3(0.5, 0.5, 0.5), k);
+    cube = make_hull(pts, 8);
+    for (k = 0; k < 24; ++k) pts[k] = mk_v3_mul(mk_rng_dir(&r), mk_v3(0.6, 0.4, 0.5));
+    hb = make_hull(pts, 24);
+    mk_shape_hull(cube, (mk_real)0.04, &shapes[0]);
+    mk_shape_hull(hb, (mk_real)0.06, &shapes[1]);
+    mk_shape_box(mk_v3(0.4, 0.3, 0.5), (mk_real)0.05, &shapes[2]);
+    mk_shape_capsule((mk_real)0.1, (mk_real)0.4, &shapes[3]);
+    m = collide(&shapes[0], at(0, 0, 0), &shapes[0], at(1.05, 1.05, 0), 0);
+    ck_assert_int_ge(m.count, 1);
+    MK_ASSERT_NEAR(max_depth(&m), 0.08 - sqrt(0.05 * 0.05 + 0.05 * 0.05), 16 * TOL);
+    MK_ASSERT_V3_NEAR(m.normal, mk_v3((mk_real)sqrt(0.5), (mk_real)sqrt(0.5), 0), 64 * TOL);
+    for (k = 0; k < 4; ++k) {
+        ck_assert_int_eq(mk_oracle_shape_init(&os[k], &shapes[k]), 0);
+        core[k] = os[k];
+        core[k].rounding = 0;
+    }
+    for (i = 0; i < 300; ++i) {
+        int ia = i % 3 == 0 ? 0 : 1, ib = i % 3 == 2 ? 3 : i % 3 == 1 ? 2 : 1;
+        const mk_shape *a = &shapes[ia], *b = &shapes[ib];
+        mk_transform xa = mk_transform_make(mk_rng_v3(&r, -5, 5), mk_rng_quat(&r)), xb = xa;
+        mk_oracle_pose pa = mk_oracle_pose_of(xa), pb;
+        mk_oracle_result o;
+        mk_vec3 dir = mk_rng_dir(&r);
+        double lo = 0, hi = 3;
+        /* Bisect the offset along dir to the cores' contact, then open a gap
+         * of up to the summed radii, so most poses fall in the band. */
+        for (k = 0; k < 20; ++k) {
+            double mid = 0.5 * (lo + hi);
+            xb.p = mk_v3_mad(xa.p, (mk_real)mid, dir);
+            pb = mk_oracle_pose_of(xb);
+            ck_assert_int_eq(mk_oracle_query(&core[ia], &pa, &core[ib], &pb, 0, &o), 0);
+            if (o.distance > 0) hi = mid;
+            else lo = mid;
+        }
+        xb.p = mk_v3_mad(xa.p, (mk_real)(hi + mk_rng_range(&r, -0.2, 1.2) * (double)(a->radius + b->radius)), dir);
+        xb.q = mk_quat_mul(mk_quat_from_axis_angle(mk_rng_dir(&r), (mk_real)mk_rng_range(&r, 0, 0.05)), xb.q);
+        pb = mk_oracle_pose_of(xb);
+        ck_assert_int_eq(mk_oracle_query(&core[ia], &pa, &core[ib], &pb, 0, &o), 0);
+        n += o.distance > 0 && o.distance < a->radius + b->radius; /* cores apart, solids overlapping */
+        ck_assert_int_eq(mk_oracle_query(&os[ia], &pa, &os[ib], &pb, 0, &o), 0);
+        m = collide(a, xa, b, xb, 0);
+        if (o.distance > 0) {
+            ck_assert_int_eq(m.count, 0);
+            continue;
+        }
+        ck_assert_int_ge(m.count, 1);
+        ck_assert_msg(fabs((double)max_depth(&m) + (double)o.distance) <= 100 * TOL, "case %d: depth %.17g, oracle %.17g", i,
+                      (double)max_depth(&m), -(double)o.distance);
+        /* Warm on the same pose: the axis kept is this pose's own, so the depth stays exact. */
+        memset(&cache, 0, sizeof cache);
+        MK_ASSERT_STATUS(mk_collide(a, xa, b, xb, 0, &cache, &m), MK_OK);
+        MK_ASSERT_STATUS(mk_collide(a, xa, b, xb, 0, &cache, &m), MK_OK);
+        ck_assert_msg(fabs((double)max_depth(&m) + (double)o.distance) <= 100 * TOL, "case %d warm: depth %.17g, oracle %.17g", i,
+                      (double)max_depth(&m), -(double)o.distance);
+    }
+    ck_assert_int_gt(n, 100);
+    for (k = 0; k < 4; ++k) mk_oracle_shape_free(&os[k]);
+    mk_hull_destroy(cube);
+    mk_hull_destroy(hb);
+}
+END_TEST
+
+/* A rounded cylinder on a rounded hull cube (the GJK/EPA pairs), cores apart
+ * and cores overlapping: standing, its rim points all at the exact depth;
+ * tilted by 0.3 rad, its lowest rim point at the analytic depth. */
+START_TEST(cylinder_on_rounded_hull)
+{
+    mk_vec3 pts[8];
+    mk_hull *h;
+    mk_shape cube, cyl;
+    mk_manifold m;
+    int i, k;
+    for (k = 0; k < 8; ++k) pts[k] = corner(mk_v3(1, 1, 0.5), k);
+    h = make_hull(pts, 8);
+    mk_shape_hull(h, (mk_real)0.04, &cube);
+    mk_shape_cylinder(0.3, 0.4, (mk_real)0.02, &cyl);
+    for (k = 0; k < 2; ++k) {
+        double gap = k ? 0.03 : -0.01; /* between the cores */
+        mk_real z = (mk_real)(0.5 + 0.4 + gap);
+        m = collide(&cube, at(0, 0, 0), &cyl, turned(mk_v3(0.1, -0.2, z), mk_v3(0, 0, 1), 0.3), 0);
+        ck_assert_int_eq(m.count, 4);
+        MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, 1), 1e-9 + 4 * TOL);
+        for (i = 0; i < 4; ++i) {
+            mk_vec3 p = m.points[i].point_b;
+            MK_ASSERT_NEAR(m.points[i].depth, 0.06 - gap, 1e-9 + 4 * TOL);
+            MK_ASSERT_NEAR(mk_v3_dist(mk_v3(p.x, p.y, 0), mk_v3(0.1, -0.2, 0)), 0.3, 1e-9 + 4 * TOL);
+        }
+        /* Tilted about x: the core's lowest point is 0.4 cos t + 0.3 sin t below its centre. */
+        z = (mk_real)(0.5 + 0.4 * cos(0.3) + 0.3 * sin(0.3) + gap);
+        m = collide(&cube, at(0, 0, 0), &cyl, turned(mk_v3(0.1, -0.2, z), mk_v3(1, 0, 0), 0.3), 0);
+        ck_assert_int_ge(m.count, 1);
+        MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, 1), 1e-9 + 4 * TOL);
+        MK_ASSERT_NEAR(max_depth(&m), 0.06 - gap, 1e-9 + 4 * TOL);
+    }
+    mk_hull_destroy(h);
+}
+END_TEST
+
 /* A box balanced on one edge on another box, with tilt noise of 1e-4 rad:
  * the face axis of A and the edge-pair axes tie to round-off, so cold calls
  * (no cache) swap between a 2-point face clip and a 1-point edge contact
@@ -952,6 +1067,8 @@ static Suite *manifold_suite(void)
     tcase_add_test(tc, hull_cube_contacts);
     tcase_add_test(tc, hull_large_face_on_plane);
     tcase_add_test(tc, hull_random_exact_depth);
+    tcase_add_test(tc, rounded_polytopes_exact);
+    tcase_add_test(tc, cylinder_on_rounded_hull);
     suite_add_tcase(s, tc);
     tc = tcase_create("feature_ids");
     tcase_add_test(tc, ids_stable_box_sliding_on_plane);

@@ -226,7 +226,19 @@ START_TEST(box_view_matches_manifold_numbering)
         } while (x != bh.hull.face_edge[f]);
         ck_assert_int_eq(f, 2 * (f / 2) + (mk_v3_dot(bh.p[f].normal, mk_v3(1, 1, 1)) > 0));
     }
-    for (v = 0; v < 8; ++v) ck_assert_int_eq(bh.hull.edges[bh.hull.vertex_edge[v]].origin, v);
+    for (v = 0; v < 8; ++v) {
+        int k, n = bh.hull.adjacency[v + 1] - bh.hull.adjacency[v];
+        ck_assert_int_eq(bh.hull.edges[bh.hull.vertex_edge[v]].origin, v);
+        ck_assert_int_eq(n, 3); /* the three corners one edge away */
+        for (k = 0; k < n; ++k) {
+            int w = bh.hull.adjacency[bh.hull.adjacency[v] + k], d = v ^ w;
+            ck_assert(d == 1 || d == 2 || d == 4);
+        }
+    }
+    for (v = 0; v < 6; ++v) { /* corner v's axis-extreme entry has the sign of that direction */
+        int x = bh.hull.adjacency[bh.hull.adjacency[8] + v];
+        ck_assert_int_eq((x >> (v / 2)) & 1, !(v & 1));
+    }
 }
 END_TEST
 

@@ -20,7 +20,15 @@
  * are dropped: ODE's contact joint would hold them as touching), g1 = o1,
  * g2 = o2, side1 = side2 = -1, pos midway between the two surfaces; the
  * whole manifold (up to 4 points), deepest point first, then the points that
- * widen the support most. Classes: sphere, box, capsule, cylinder, convex and
+ * widen the support most. Each pair of geoms keeps Minko's manifold cache
+ * from call to call (either argument order), so a resting box keeps its face
+ * and its four points when it tilts a little (manifold.h: a warm query may
+ * report the kept face's depth, within its hysteresis; a lone edge-on-edge
+ * point is not kept, so faces win ties as in ODE's dBoxBox); a new pair is
+ * cold and exact. A pair whose two addresses were freed by dGeomDestroy and
+ * reused by new geoms of the same classes inherits that hint, which costs
+ * at most the hysteresis. One record per pair seen; records idle for longer
+ * than there are live pairs, in calls, are reused. Classes: sphere, box, capsule, cylinder, convex and
  * plane, for the pairs the linked Minko build answers (asked once at run
  * time: a build may leave modules out); mk_ode_supports() tells. ODE keeps
  * no getter for a convex geom's data, so convex geoms are Minko's only when

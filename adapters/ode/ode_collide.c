@@ -19,6 +19,30 @@
  * Convex geoms: ODE keeps the caller's arrays but offers no getter, so the
  * wrappers record each convex geom's Minko hull (built once by quickhull from
  * its points) in a side table keyed by dGeomID.
+ *
+ * Each pair keeps its mk_manifold_cache from call to call. It is not an
+ * optimisation: a cold mk_collide answers with the exact minimum axis, which
+ * for two boxes stacked 1e-4 rad out of parallel is an edge pair and one
+ * point, and a 10-box tower fed such contacts sinks into itself and falls
+ * (measured in ode_scenes: 23.6 contacts per step instead of 40, the top box
+ * 12.9 m from where it started); with the cache the pair keeps clipping
+ * against last frame's face and gets its four points. mk_collide wants the
+ * shapes in the same order every time, and ODE passes a pair either way
+ * round (spaces reorder, overrides of a class with itself are called
+ * swapped), so Minko always sees the pair in address order and the result is
+ * turned round when needed. ODE never says that a pair ended: records not
+ * used during about the last table's worth of calls are recycled before the
+ * table grows.
+ *
+ * The cache keeps faces, not edges. Its hysteresis keeps whichever kind of
+ * axis won last, so two boxes that once came out edge on edge (turned 3e-3
+ * rad, a face nearly as good) stayed on one point for good: in the 210-box
+ * pyramid 358 of about 395 box pairs ended with one point (ODE's dBoxBox:
+ * about 40), and the pyramid shook itself apart (kinetic energy 10.7 J at
+ * the end against ODE's 0.07). ODE's dBoxBox and Box2D favour faces; here a
+ * lone edge-on-edge point of two polytopes sends the pair's next query in
+ * cold, which takes the face again as soon as it is the minimum (then 359
+ * pairs with four points, 0.14 J; ode_scenes --scene pyramid).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -97,12 +121,12 @@ static int nconvex, capconvex;
 
 static void drop_convex(dGeomID g)
 {
-    long i = mk_ode_map_get(&convex_index, g);
+    long i = mk_ode_map_get(&convex_index, g, NULL);
     if (i < 0) return;
     mk_hull_destroy(convex[i].hull);
     convex[i].hull = NULL;
     convex[i].geom = NULL;
-    mk_ode_map_remove(&convex_index, g);
+    mk_ode_map_remove(&convex_index, g, NULL);
 }
 
 /* Builds the hull once, from the points ODE collides with (the planes and
@@ -135,7 +159,7 @@ static mk_status record_convex(dGeomID g, const dReal *points, unsigned int poin
         convex = c;
         capconvex = cap;
     }
-    if (mk_ode_map_put(&convex_index, g, (uint32_t)slot) != 0) {
+    if (mk_ode_map_put(&convex_index, g, NULL, (uint32_t)slot) != 0) {
         mk_hull_destroy(hull);
         return MK_ERR_OUT_OF_MEMORY;
     }
@@ -181,7 +205,7 @@ void mk_ode_geom_destroy(dGeomID g)
  * (both are exact over the same extreme points). */
 static const mk_hull *hull_of(dGeomID g)
 {
-    long i = mk_ode_map_get(&convex_index, g);
+    long i = mk_ode_map_get(&convex_index, g, NULL);
     const mk_hull *h;
     const dReal *p, *R;
     dReal box[6], size = 0, tol;
@@ -209,6 +233,122 @@ static const mk_hull *hull_of(dGeomID g)
     return h;
 }
 
+/* ---- per-pair manifold caches ---- */
+
+typedef struct pair_rec {
+    dGeomID lo, hi;                   /* lo == NULL: free record */
+    int class_lo, class_hi;
+    const mk_hull *hull_lo, *hull_hi; /* a convex geom's hull: a new one voids the cache */
+    uint64_t last;                    /* `ticks` when last used */
+    int next_free;                    /* free records form a list */
+    mk_manifold_cache cache;
+} pair_rec;
+
+static mk_ode_map pair_index; /* (lo, hi) -> record */
+static pair_rec *pair_recs;
+static int npair_recs, cappair_recs, live_pairs, free_pairs = -1;
+static uint64_t ticks; /* cached Minko narrowphase calls so far */
+
+/* Frees the records idle for longer than the table is large, in calls: with
+ * n live pairs colliding every frame, a pair idle for n calls missed a frame.
+ * Returns how many it freed. */
+static int recycle_pairs(void)
+{
+    int i, freed = 0;
+    for (i = 0; i < npair_recs; i++) {
+        pair_rec *r = &pair_recs[i];
+        if (r->lo && r->last + (uint64_t)live_pairs < ticks) {
+            mk_ode_map_remove(&pair_index, r->lo, r->hi);
+            r->lo = NULL;
+            r->next_free = free_pairs;
+            free_pairs = i;
+            live_pairs--;
+            freed++;
+        }
+    }
+    return freed;
+}
+
+/* A free record: from the free list, else the unused tail, else recycled;
+ * the table doubles unless recycling freed more than a quarter of it, so the
+ * O(n) recycling scan costs O(1) per new pair, amortised. */
+static int new_pair_rec(void)
+{
+    int i;
+    if (free_pairs < 0 && npair_recs == cappair_recs && 4 * recycle_pairs() <= cappair_recs) {
+        int cap = cappair_recs ? 2 * cappair_recs : 64;
+        pair_rec *p = realloc(pair_recs, (size_t)cap * sizeof *p);
+        if (!p && free_pairs < 0) return -1;
+        if (p) {
+            pair_recs = p;
+            cappair_recs = cap;
+        }
+    }
+    if (free_pairs >= 0) {
+        i = free_pairs;
+        free_pairs = pair_recs[i].next_free;
+        return i;
+    }
+    return npair_recs < cappair_recs ? npair_recs++ : -1;
+}
+
+static void release_pair_rec(int i)
+{
+    pair_recs[i].lo = NULL;
+    pair_recs[i].next_free = free_pairs;
+    free_pairs = i;
+}
+
+/* Whether the pair's cache can carry anything (manifold.h): an axis kind or
+ * a reference face needs faces on both shapes, a GJK simplex a pair without
+ * a closed form; planes, and spheres or capsules against spheres, capsules
+ * or boxes, have neither, so they skip the lookup (the stress scene's 60 000
+ * sphere pairs a step). */
+static int cache_useful(const mk_shape *a, const mk_shape *b)
+{
+    int round_a = a->type == MK_SHAPE_SPHERE || a->type == MK_SHAPE_CAPSULE;
+    int round_b = b->type == MK_SHAPE_SPHERE || b->type == MK_SHAPE_CAPSULE;
+    if (a->type == MK_SHAPE_PLANE || b->type == MK_SHAPE_PLANE) return 0;
+    if (round_a) return !(round_b || b->type == MK_SHAPE_BOX);
+    return !round_b || a->type != MK_SHAPE_BOX;
+}
+
+/* The cache of the pair (lo, hi), zeroed when either geom changed class or
+ * hull (an address reused by another geom); NULL (a cold query) when it
+ * would carry nothing, or memory runs out. */
+static mk_manifold_cache *pair_cache(dGeomID lo, dGeomID hi, const mk_shape *a, const mk_shape *b)
+{
+    const mk_hull *ha = a->type == MK_SHAPE_HULL ? a->u.hull : NULL, *hb = b->type == MK_SHAPE_HULL ? b->u.hull : NULL;
+    long i;
+    pair_rec *r;
+    if (!cache_useful(a, b)) return NULL;
+    i = mk_ode_map_get(&pair_index, lo, hi);
+    ticks++;
+    if (i < 0) {
+        i = new_pair_rec();
+        if (i < 0) return NULL;
+        if (mk_ode_map_put(&pair_index, lo, hi, (uint32_t)i) != 0) {
+            release_pair_rec((int)i);
+            return NULL;
+        }
+        r = &pair_recs[i];
+        r->lo = lo;
+        r->hi = hi;
+        r->class_lo = -1;
+        live_pairs++;
+    }
+    r = &pair_recs[i];
+    if (r->class_lo != dGeomGetClass(lo) || r->class_hi != dGeomGetClass(hi) || r->hull_lo != ha || r->hull_hi != hb) {
+        memset(&r->cache, 0, sizeof r->cache);
+        r->class_lo = dGeomGetClass(lo);
+        r->class_hi = dGeomGetClass(hi);
+        r->hull_lo = ha;
+        r->hull_hi = hb;
+    }
+    r->last = ticks;
+    return &r->cache;
+}
+
 void mk_ode_collide_free_all(void)
 {
     int i;
@@ -218,6 +358,11 @@ void mk_ode_collide_free_all(void)
     convex = NULL;
     nconvex = capconvex = 0;
     mk_ode_map_free(&convex_index);
+    free(pair_recs);
+    pair_recs = NULL;
+    npair_recs = cappair_recs = live_pairs = 0;
+    free_pairs = -1;
+    mk_ode_map_free(&pair_index);
 }
 
 static int pair_supported(int c1, int c2)
@@ -230,8 +375,8 @@ static int pair_supported(int c1, int c2)
 int mk_ode_supports(dGeomID o1, dGeomID o2)
 {
     if (!o1 || !o2 || !pair_supported(dGeomGetClass(o1), dGeomGetClass(o2))) return 0;
-    if (dGeomGetClass(o1) == dConvexClass && mk_ode_map_get(&convex_index, o1) < 0) return 0;
-    return dGeomGetClass(o2) != dConvexClass || mk_ode_map_get(&convex_index, o2) >= 0;
+    if (dGeomGetClass(o1) == dConvexClass && mk_ode_map_get(&convex_index, o1, NULL) < 0) return 0;
+    return dGeomGetClass(o2) != dConvexClass || mk_ode_map_get(&convex_index, o2, NULL) >= 0;
 }
 
 const dReal *mk_ode_origin_(dGeomID o1, dGeomID o2)
@@ -326,24 +471,42 @@ static int choose_points(const mk_manifold *m, int maxc, int *order)
     return n;
 }
 
+static int is_polytope(const mk_shape *s) { return s->type == MK_SHAPE_BOX || s->type == MK_SHAPE_HULL; }
+
+/* m is a single point where an edge of polytope a meets an edge of polytope b. */
+static int edge_on_edge(const mk_shape *a, const mk_shape *b, const mk_manifold *m)
+{
+    uint32_t f = m->points[0].features;
+    return m->count == 1 && is_polytope(a) && is_polytope(b) && MK_FEATURE_TYPE(MK_FEATURE_PAIR_A(f)) == MK_FEATURE_EDGE &&
+           MK_FEATURE_TYPE(MK_FEATURE_PAIR_B(f)) == MK_FEATURE_EDGE;
+}
+
 /* Minko for a supported pair; -1 when Minko could not answer (the caller
  * decides: fall back to dCollide, or report nothing). */
 static int minko_collide(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip)
 {
     int maxc = flags & ODE_NUMC_MASK, order[MK_MANIFOLD_MAX_POINTS], n, i;
-    const dReal *origin = mk_ode_origin_(o1, o2);
+    int swapped = (uintptr_t)o1 > (uintptr_t)o2; /* Minko sees (lo, hi) */
+    dGeomID lo = swapped ? o2 : o1, hi = swapped ? o1 : o2;
+    const dReal *origin = mk_ode_origin_(lo, hi);
+    dReal sign = swapped ? 1 : -1; /* Minko's normal points from lo to hi; ODE's from o2 into o1 */
     mk_shape a, b;
     mk_transform xa, xb;
     mk_manifold m;
-    mk_status s = mk_ode_shape_of_(o1, origin, &a, &xa);
-    if (s == MK_OK) s = mk_ode_shape_of_(o2, origin, &b, &xb);
-    if (s == MK_OK) s = mk_collide(&a, xa, &b, xb, 0, NULL, &m);
+    mk_manifold_cache *cache = NULL;
+    mk_status s = mk_ode_shape_of_(lo, origin, &a, &xa);
+    if (s == MK_OK) s = mk_ode_shape_of_(hi, origin, &b, &xb);
+    if (s == MK_OK) {
+        cache = pair_cache(lo, hi, &a, &b);
+        s = mk_collide(&a, xa, &b, xb, 0, cache, &m);
+    }
     if (s != MK_OK) {
         mk_ode_stats_.errors++;
         mk_ode_stats_.last_error = s;
         return -1;
     }
     mk_ode_stats_.collide_calls++;
+    if (cache && edge_on_edge(&a, &b, &m)) memset(cache, 0, sizeof *cache); /* faces are kept, edges not: see the top */
     if ((unsigned int)flags & ODE_CONTACTS_UNIMPORTANT) maxc = 1;
     n = choose_points(&m, maxc < MK_MANIFOLD_MAX_POINTS ? maxc : MK_MANIFOLD_MAX_POINTS, order);
     for (i = 0; i < n; i++) {
@@ -354,9 +517,9 @@ static int minko_collide(dGeomID o1, dGeomID o2, int flags, dContactGeom *contac
         c->pos[1] = origin[1] + (dReal)mid.y;
         c->pos[2] = origin[2] + (dReal)mid.z;
         c->pos[3] = 0;
-        c->normal[0] = -(dReal)m.normal.x;
-        c->normal[1] = -(dReal)m.normal.y;
-        c->normal[2] = -(dReal)m.normal.z;
+        c->normal[0] = sign * (dReal)m.normal.x;
+        c->normal[1] = sign * (dReal)m.normal.y;
+        c->normal[2] = sign * (dReal)m.normal.z;
         c->normal[3] = 0;
         c->depth = (dReal)p->depth;
         c->g1 = o1;

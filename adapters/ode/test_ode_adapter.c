@@ -11,7 +11,8 @@
  *
  * Narrowphase: sphere-sphere, sphere-box (and box-box once Minko's SAT is in
  * the build) against ODE's own colliders on the same poses; stride,
- * max-contacts, CONTACTS_UNIMPORTANT and separated pairs; fallback to
+ * max-contacts, CONTACTS_UNIMPORTANT and separated pairs; the per-pair
+ * manifold cache (warm keeps a face but not an edge pair, cold is exact); fallback to
  * dCollide; overrides gone after dCloseODE/dInitODE2 and back after
  * mk_ode_init; convex records and their staleness guard; time of impact.
  */
@@ -571,12 +572,15 @@ END_TEST
 
 /* Box on box, tilted by at most 0.2 rad: the contact normal is a face normal
  * for both, so normal and deepest depth must agree with ODE's dBoxBox; and
- * moving o1 along the normal by that depth must separate the boxes. */
+ * moving o1 along the normal by that depth must separate the boxes. Every
+ * pose is a new pair, so the geoms live until the end: destroyed ones would
+ * hand their addresses, and so their pair's manifold cache, to the next pose
+ * (a warm query, which may keep the last pose's axis; test_pair_cache). */
 START_TEST(test_box_box_matches_ode)
 {
     mk_rng r = {0x0de0500u};
     int k, agree = 0;
-    dGeomID probe_a, probe_b;
+    dGeomID probe_a, probe_b, pairs[200][2];
     dInitODE2(0);
     probe_a = dCreateBox(0, 1, 1, 1);
     probe_b = dCreateBox(0, 1, 1, 1);
@@ -624,14 +628,144 @@ START_TEST(test_box_box_matches_ode)
                              p[2] + got[0].normal[2] * (got[0].depth + 1e-6));
             ck_assert_int_eq(dCollide(a, b, MAXC, after, sizeof(dContactGeom)), 0);
         }
-        dGeomDestroy(a);
-        dGeomDestroy(b);
+        pairs[k][0] = a;
+        pairs[k][1] = b;
+    }
+    for (k = 0; k < 200; k++) {
+        dGeomDestroy(pairs[k][0]);
+        dGeomDestroy(pairs[k][1]);
     }
     /* dBoxBox prefers face normals by a 5 % fudge factor, so where an edge
      * pair is the true minimum axis it reports a deeper face contact; Minko
      * is checked against the exact depth above, and the share of poses where
      * the two agree is information, not a pass criterion. */
     fprintf(stderr, "test_box_box_matches_ode: %d of 200 poses agree exactly with dBoxBox\n", agree);
+    mk_ode_close();
+}
+END_TEST
+
+/* Why the adapter keeps a manifold cache per pair: a box resting on another
+ * and turned 1e-4 rad out of parallel has an edge pair as its exact minimum
+ * axis, so a cold query gives one point; the pair that was resting flat a
+ * step before keeps clipping against the face and keeps four points, with
+ * the face's depth, within the hysteresis manifold.h states. The same pose
+ * as a new pair (other geoms) is cold again and exact. */
+START_TEST(test_pair_cache)
+{
+    dContactGeom warm[MAXC], cold[MAXC];
+    dGeomID top, base, top2, base2;
+    dMatrix3 R;
+    dQuaternion q;
+    mk_shape cube;
+    mk_oracle_result o;
+    int n, k;
+    dInitODE2(0);
+    top = dCreateBox(0, 1, 1, 1);
+    base = dCreateBox(0, 1, 1, 1);
+    if (!mk_ode_supports(top, base)) {
+        fprintf(stderr, "test_pair_cache: box-box is not in this Minko build; skipped\n");
+        mk_ode_close();
+        return;
+    }
+    dGeomSetPosition(base, 5, 5, 0);
+    dGeomSetPosition(top, 5.2, 5.1, 0.999);
+    ck_assert_int_eq(mk_ode_collide(top, base, MAXC, warm, sizeof(dContactGeom)), 4);
+    dRFromAxisAndAngle(R, 1, 1, 0, 1e-4);
+    dGeomSetRotation(top, R);
+    n = mk_ode_collide(top, base, MAXC, warm, sizeof(dContactGeom));
+    top2 = dCreateBox(0, 1, 1, 1);
+    base2 = dCreateBox(0, 1, 1, 1);
+    dGeomSetPosition(base2, 5, 5, 0);
+    dGeomSetPosition(top2, 5.2, 5.1, 0.999);
+    dGeomSetRotation(top2, R);
+    dGeomGetQuaternion(top2, q);
+    mk_shape_box(mk_v3(0.5, 0.5, 0.5), 0, &cube);
+    ck_assert_int_eq(mk_oracle_distance(&cube, mk_transform_make(mk_v3(5.2, 5.1, 0.999), mk_quat_make(q[1], q[2], q[3], q[0])),
+                                        &cube, mk_transform_make(mk_v3(5, 5, 0), mk_quat_identity()), &o), 0);
+    /* warm: the face, four points, a depth no less than the minimum and within the hysteresis */
+    ck_assert_int_eq(n, 4);
+    assert_conventions(warm, n, sizeof(dContactGeom), top, base);
+    ck_assert(warm[0].depth >= -(double)o.distance - TOL);
+    ck_assert(warm[0].depth <= -1.05 * (double)o.distance + 0.005 + TOL);
+    for (k = 0; k < 4; k++) ck_assert(warm[k].normal[2] > 1 - 1e-6);
+    /* cold: exact */
+    n = mk_ode_collide(top2, base2, MAXC, cold, sizeof(dContactGeom));
+    ck_assert_int_ge(n, 1);
+    assert_conventions(cold, n, sizeof(dContactGeom), top2, base2);
+    MK_ASSERT_NEAR(cold[0].depth, -(double)o.distance, TOL);
+#ifndef MK_SINGLE /* in float the edge wins by 3e-12, far below rounding: either answer is right */
+    ck_assert_int_eq(n, 1);
+#endif
+    /* Edge on edge is not kept: from that one point, the pair moves to a
+     * pose whose minimum is a face with the edge pair within the hysteresis
+     * band; keeping the edge would give one point, the face gives four, as a
+     * new pair does (the pose was found by a search for exactly that). */
+    dRFromAxisAndAngle(R, 0.321881, 0.579229, -0.087924, 0.00081822);
+    dGeomSetRotation(top2, R);
+    dGeomSetPosition(top2, 5 - 0.251997, 5 + 0.039561, 0.999062);
+    n = mk_ode_collide(top2, base2, MAXC, warm, sizeof(dContactGeom));
+    {
+        dGeomID fresh_top = dCreateBox(0, 1, 1, 1), fresh_base = dCreateBox(0, 1, 1, 1);
+        dGeomSetRotation(fresh_top, R);
+        dGeomSetPosition(fresh_top, 5 - 0.251997, 5 + 0.039561, 0.999062);
+        dGeomSetPosition(fresh_base, 5, 5, 0);
+        ck_assert_int_eq(n, mk_ode_collide(fresh_top, fresh_base, MAXC, cold, sizeof(dContactGeom)));
+        dGeomDestroy(fresh_top);
+        dGeomDestroy(fresh_base);
+    }
+#ifndef MK_SINGLE
+    ck_assert_int_eq(n, 4);
+#endif
+    dGeomDestroy(top);
+    dGeomDestroy(base);
+    dGeomDestroy(top2);
+    dGeomDestroy(base2);
+    mk_ode_close();
+}
+END_TEST
+
+/* The per-pair records under churn: pairs appear, go idle and are replaced
+ * by new geoms (some at reused addresses), so the record table grows,
+ * recycles idle records and reuses them; every resting pair keeps its four
+ * points and Minko answers every call. */
+START_TEST(test_pair_cache_churn)
+{
+    enum { N = 300, FRAMES = 12 };
+    dGeomID top[N], base[N];
+    dContactGeom c[MAXC];
+    long long before;
+    int i, frame;
+    dInitODE2(0);
+    for (i = 0; i < N; i++) {
+        base[i] = dCreateBox(0, 1, 1, 1);
+        dGeomSetPosition(base[i], 3 * i, 0, 0);
+        top[i] = NULL;
+    }
+    if (!mk_ode_supports(base[0], base[1])) {
+        fprintf(stderr, "test_pair_cache_churn: box-box is not in this Minko build; skipped\n");
+        for (i = 0; i < N; i++) dGeomDestroy(base[i]);
+        mk_ode_close();
+        return;
+    }
+    before = minko_calls();
+    for (frame = 0; frame < FRAMES; frame++) {
+        /* a third of the stacks is live each frame; every third frame they are rebuilt with new tops */
+        int from = (frame / 3 % 3) * (N / 3);
+        for (i = from; i < from + N / 3; i++) {
+            if (frame % 3 == 0) {
+                if (top[i]) dGeomDestroy(top[i]);
+                top[i] = dCreateBox(0, 0.8, 0.8, 0.8);
+                dGeomSetPosition(top[i], 3 * i + 0.05, 0.02, 0.899);
+            }
+            ck_assert_int_eq(mk_ode_collide(i % 2 ? top[i] : base[i], i % 2 ? base[i] : top[i], MAXC, c, sizeof(dContactGeom)), 4);
+            MK_ASSERT_NEAR(c[0].depth, 0.001, 100 * TOL);
+        }
+    }
+    ck_assert_int_eq((int)(minko_calls() - before), FRAMES * (N / 3));
+    for (i = 0; i < N; i++) {
+        if (top[i]) dGeomDestroy(top[i]);
+        dGeomDestroy(base[i]);
+    }
     mk_ode_close();
 }
 END_TEST
@@ -891,6 +1025,8 @@ int main(void)
     tcase_add_test(np, test_sphere_sphere_matches_ode);
     tcase_add_test(np, test_sphere_box_matches_ode);
     tcase_add_test(np, test_box_box_matches_ode);
+    tcase_add_test(np, test_pair_cache);
+    tcase_add_test(np, test_pair_cache_churn);
     tcase_add_test(np, test_stride_and_max_contacts);
     tcase_add_test(np, test_fallback_to_dcollide);
     tcase_add_test(np, test_override_reinstalled_after_reinit);

@@ -26,13 +26,18 @@
  * untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing allocates;
  * every query runs in A's local frame. Methods: closed forms for sphere,
  * capsule and box-capsule pairs and for anything against a plane; SAT
- * (src/sat.h) with reference/incident face clipping for box and hull pairs;
+ * (src/sat.h) with reference/incident face clipping for box and hull pairs,
+ * exact for rounded ones too: when their cores are apart, SAT's separation
+ * is only a lower bound of the core distance, so unless the clipped points
+ * realise it GJK gives the exact distance (two rounded cubes edge to edge;
+ * a build without GJK keeps the bound);
  * the exact GJK/EPA normal and closest points for the rest (cylinders,
  * cones, spheres and capsules against hulls), whose support faces are then
  * clipped. A build without SAT (MK_WITHOUT) takes GJK/EPA for box and hull
  * pairs too; one without GJK or EPA returns MK_ERR_UNSUPPORTED for the pairs
  * that need them. Complexity per call: O(1) for the closed forms and for two
- * boxes (15 axes, a 4-by-4 face clip); for hulls SAT's O(F_A S_B + F_B S_A +
+ * boxes (15 axes, a 4-by-4 face clip: about 3.3k instructions per call on
+ * demos/bench_contacts' resting and random boxes, 40 % of it SAT); for hulls SAT's O(F_A S_B + F_B S_A +
  * E_A E_B) (src/sat.h) plus O(n + m) clipping of faces with n and m (at most
  * 32) vertices; GJK/EPA pairs are bounded by their iteration caps.
  *

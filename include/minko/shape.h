@@ -56,6 +56,8 @@ typedef struct mk_hull {
     const uint16_t *face_edge; /* one half-edge of each face */
     const mk_plane *planes;    /* outward unit normal and offset of each face */
     const uint16_t *vertex_edge; /* one half-edge leaving each vertex */
+    const uint16_t *adjacency; /* vertex v's neighbours: adjacency[adjacency[v] .. adjacency[v + 1]);
+                                * then the vertices extreme along +x, -x, +y, -y, +z, -z */
     mk_vec3 centroid;          /* centroid of the solid */
     mk_real inner_radius;      /* distance from centroid to the nearest face plane */
     mk_real outer_radius;      /* distance from centroid to the farthest vertex */
@@ -127,7 +129,8 @@ MK_API mk_status mk_hull_create(const mk_vec3 *points, int count, const mk_alloc
 MK_API void mk_hull_destroy(mk_hull *hull);
 
 /* Index of the hull vertex farthest along dir (hill climbing from `start`,
- * which may be any vertex index, e.g. the previous answer; -1 to start at 0). */
+ * which may be any vertex index, e.g. the previous answer; -1 to start at the
+ * best of the six axis-extreme vertices). */
 MK_API int mk_hull_support_index(const mk_hull *hull, mk_vec3 dir, int start);
 
 #ifdef __cplusplus
