@@ -19,7 +19,8 @@
 // mean points per manifold. JSON Lines per ../shared/BENCH_FORMAT.md (suite
 // "contacts", case "box_box") plus a table.
 //
-//   bench_contacts [--quick] [--json FILE]
+//   bench_contacts [--quick] [--json FILE] [--family stacked|random]
+// (--family runs one case family, e.g. for callgrind instruction counts.)
 
 #include <algorithm>
 #include <cmath>
@@ -379,12 +380,13 @@ void report(FILE *jf, const char *family, const std::vector<Case> &cs, const std
 int main(int argc, char **argv)
 {
     bool quick = false;
-    const char *json = nullptr;
+    const char *json = nullptr, *only = nullptr;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--quick")) quick = true;
         else if (!strcmp(argv[i], "--json") && i + 1 < argc) json = argv[++i];
+        else if (!strcmp(argv[i], "--family") && i + 1 < argc) only = argv[++i];
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--family stacked|random]\n", argv[0]);
             return 2;
         }
     }
@@ -405,6 +407,7 @@ int main(int argc, char **argv)
         sizeof(btScalar) == 8 ? "bullet_f64.btBoxBoxCollisionAlgorithm" : "bullet_f32.btBoxBoxCollisionAlgorithm";
     const char *families[] = {"stacked", "random"};
     for (const char *fam : families) {
+        if (only && strcmp(only, fam)) continue;
         std::vector<Case> cs = make_cases(fam, n, fam[0] == 's' ? 1 : 2);
         std::vector<Backend> bes;
         {

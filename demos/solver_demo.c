@@ -403,7 +403,7 @@ typedef struct scene {
 
 /* Catto 2005's boxes: 0.7 x 0.7 x 0.3 m, about 110 kg. */
 #define TOWER_HALF mk_v3(MK_REAL(0.35), MK_REAL(0.35), MK_REAL(0.15))
-#define TOWER_DENSITY MK_REAL(750)
+#define TOWER_DENSITY MK_REAL(750.0)
 
 static void build_tower(world *w)
 {

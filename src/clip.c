@@ -32,22 +32,27 @@ mk_feature mk_box_edge(int ci, int cj)
 
 void mk_box_face(const mk_shape *s, int axis, int positive, mk_feat *f)
 {
-    /* Corners of face +axis in counter-clockwise order around +e_axis: in the
-     * (b, c) plane with b = axis+1, c = axis+2 (cyclic), (-,-) (+,-) (+,+) (-,+). */
-    static const int bc[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    int b = (axis + 1) % 3, c = (axis + 2) % 3, i, corner[4];
+    /* Per face 2 * axis + positive: its corners counter-clockwise seen from
+     * outside, starting from the one with the lowest of the two in-face
+     * coordinates ((-,-) in the cyclic order axis+1, axis+2), and the box
+     * edges from each corner to the next (mk_box_edge of the pair). */
+    static const unsigned char corner[6][4] = {{4, 6, 2, 0}, {1, 3, 7, 5}, {1, 5, 4, 0}, {2, 6, 7, 3}, {2, 3, 1, 0}, {4, 5, 7, 6}};
+    static const unsigned char edge[6][4] = {{6, 10, 4, 8}, {5, 11, 7, 9}, {9, 2, 8, 0}, {10, 3, 11, 1}, {1, 5, 0, 4}, {2, 7, 3, 6}};
+    int face = 2 * axis + positive, i;
     mk_vec3 h = s->u.half_extents;
     for (i = 0; i < 4; ++i) {
-        int k = positive ? i : 3 - i; /* reversed order keeps -axis faces counter-clockwise too */
-        corner[i] = (positive << axis) | (bc[k][0] << b) | (bc[k][1] << c);
-        f->v[i] = mk_v3(corner[i] & 1 ? h.x : -h.x, corner[i] & 2 ? h.y : -h.y, corner[i] & 4 ? h.z : -h.z);
-        f->vid[i] = V(corner[i]);
+        int c = corner[face][i];
+        f->v[i] = mk_v3(c & 1 ? h.x : -h.x, c & 2 ? h.y : -h.y, c & 4 ? h.z : -h.z);
+        f->vid[i] = V(c);
+        f->eid[i] = E(edge[face][i]);
     }
-    for (i = 0; i < 4; ++i) f->eid[i] = mk_box_edge(corner[i], corner[(i + 1) % 4]);
     f->count = 4;
     f->exact = 1;
-    f->id = F(2 * axis + positive);
-    f->normal = mk_v3(axis == 0 ? (positive ? 1 : -1) : 0, axis == 1 ? (positive ? 1 : -1) : 0, axis == 2 ? (positive ? 1 : -1) : 0);
+    f->id = F(face);
+    f->normal = mk_v3_zero();
+    if (axis == 0) f->normal.x = positive ? 1 : -1;
+    else if (axis == 1) f->normal.y = positive ? 1 : -1;
+    else f->normal.z = positive ? 1 : -1;
 }
 
 /* Cap k (0: z = -h, 1: z = +h) of a cylinder or cone of radius r as a polygon
@@ -300,17 +305,20 @@ mk_feature mk_feature_at(const mk_shape *s, mk_vec3 p, mk_vec3 n)
 
 /* ---- clipping --------------------------------------------------------------- */
 
-/* A side plane of the reference feature: x . n <= d keeps x. */
+/* A side plane of the reference feature: x . n <= d keeps x. The normal of
+ * a polygon's side plane is not normalised (only signs and ratios of x . n
+ * - d are used), which saves a square root and a division per side; its
+ * length is then the side's length wherever the slop applies. */
 typedef struct side_plane { mk_vec3 n; mk_real d, slop; mk_feature id; } side_plane;
 
-/* An incident vertex up to this fraction of the reference feature's size
- * outside a side plane is kept as it is instead of being replaced by the
+/* An incident vertex up to this fraction of the reference side's length
+ * (of the segment's, for a segment) outside a side plane is kept as it is instead of being replaced by the
  * crossings of its two edges with the plane. Equal boxes stacked square have
  * incident corners exactly on the side planes; without the slop round-off
  * decides, frame by frame, whether a corner is kept (vertex against face) or
  * clipped into two crossing points (edge against edge), and the feature IDs
  * flicker. With it they change only when the misalignment really crosses
- * 0.5 % of the size. Crossings are always computed on the exact planes, so
+ * 0.35 % of the side (0.5 % of a square's half diagonal). Crossings are always computed on the exact planes, so
  * clipped regions stay exact; only a vertex in the slop strip may lie that
  * little outside the reference face, which no solver notices. Only when the
  * clip direction is the face's own normal, though: along an axis tilted
@@ -319,20 +327,17 @@ typedef struct side_plane { mk_vec3 n; mk_real d, slop; mk_feature id; } side_pl
  * are apart: a vertex beside the face is then farther from it than its
  * height over the plane, and rounded shapes resting apart by their radii
  * (Bullet's margins) must get exact depths. */
-#define MK_MF_CLIP_SLOP MK_REAL(0.005)
+#define MK_MF_CLIP_SLOP MK_REAL(0.0035)
 
 static int side_planes(const mk_feat *ref, mk_vec3 n, int slop, side_plane *sp)
 {
-    int i, count;
+    int i, count = ref->count;
     mk_vec3 c = mk_v3_zero();
-    mk_real size = 0;
-    for (i = 0; i < ref->count; ++i) c = mk_v3_add(c, ref->v[i]);
-    c = mk_v3_scale(c, 1 / (mk_real)ref->count);
-    for (i = 0; i < ref->count; ++i) size = mk_max(size, mk_v3_len2(mk_v3_sub(c, ref->v[i])));
-    size = mk_sqrt_(size);
-    if (ref->count == 2) {
+    slop = slop && (count == 2 || mk_fabs_(mk_v3_dot(n, ref->normal)) >= 1 - 64 * MK_REAL_EPSILON);
+    if (count == 2) {
         /* The two end planes of a segment, perpendicular to it within the contact plane. */
         mk_vec3 u = mk_v3_sub(ref->v[1], ref->v[0]);
+        mk_real width = slop ? MK_MF_CLIP_SLOP * mk_v3_len(u) : 0;
         u = mk_v3_normalize(mk_v3_mad(u, -mk_v3_dot(u, n), n));
         sp[0].n = mk_v3_neg(u);
         sp[0].d = -mk_v3_dot(u, ref->v[0]);
@@ -340,21 +345,23 @@ static int side_planes(const mk_feat *ref, mk_vec3 n, int slop, side_plane *sp)
         sp[1].n = u;
         sp[1].d = mk_v3_dot(u, ref->v[1]);
         sp[1].id = ref->vid[1];
-        count = 2;
-    } else {
-        /* The prism swept by the polygon along n (not along its own normal: see mk_mf_clip). */
-        for (i = 0; i < ref->count; ++i) {
-            mk_vec3 a = ref->v[i], b = ref->v[(i + 1) % ref->count];
-            mk_vec3 sn = mk_v3_normalize(mk_v3_cross(mk_v3_sub(b, a), n));
-            if (mk_v3_dot(sn, mk_v3_sub(c, a)) > 0) sn = mk_v3_neg(sn); /* outward, whatever the winding */
-            sp[i].n = sn;
-            sp[i].d = mk_v3_dot(sn, a);
-            sp[i].id = ref->eid[i];
-        }
-        count = ref->count;
+        sp[0].slop = sp[1].slop = width;
+        return 2;
     }
-    for (i = 0; i < count; ++i)
-        sp[i].slop = slop && (count == 2 || mk_fabs_(mk_v3_dot(n, ref->normal)) >= 1 - 64 * MK_REAL_EPSILON) ? MK_MF_CLIP_SLOP * size : 0;
+    /* The prism swept by the polygon along n (not along its own normal: see
+     * mk_mf_clip). Where the slop applies n is the face normal, so the side
+     * normal (b - a) x n is as long as the side: the strip is c |b - a|^2. */
+    for (i = 0; i < count; ++i) c = mk_v3_add(c, ref->v[i]);
+    c = mk_v3_scale(c, 1 / (mk_real)count);
+    for (i = 0; i < count; ++i) {
+        mk_vec3 a = ref->v[i], e = mk_v3_sub(ref->v[i + 1 < count ? i + 1 : 0], a);
+        mk_vec3 sn = mk_v3_cross(e, n);
+        if (mk_v3_dot(sn, mk_v3_sub(c, a)) > 0) sn = mk_v3_neg(sn); /* outward, whatever the winding */
+        sp[i].n = sn;
+        sp[i].d = mk_v3_dot(sn, a);
+        sp[i].id = ref->eid[i];
+        sp[i].slop = slop ? MK_MF_CLIP_SLOP * mk_v3_len2(e) : 0;
+    }
     return count;
 }
 
@@ -413,10 +420,17 @@ static int clip_polygon(const mk_feat *ref, const mk_feat *inc, const side_plane
     }
     for (q = 0; q < nsp && n > 0; ++q) {
         clip_vert *src = buf[cur], *dst = buf[cur ^ 1];
-        int m = 0;
+        mk_real dist[MK_MF_MAX];
+        int m = 0, out_count = 0;
         for (i = 0; i < n; ++i) {
-            const clip_vert *a = &src[i], *b = &src[(i + 1) % n];
-            mk_real da = mk_v3_dot(sp[q].n, a->p) - sp[q].d, db = mk_v3_dot(sp[q].n, b->p) - sp[q].d;
+            dist[i] = mk_v3_dot(sp[q].n, src[i].p) - sp[q].d;
+            out_count += !(dist[i] <= sp[q].slop);
+        }
+        if (out_count == 0) continue; /* wholly inside this plane: nothing changes */
+        for (i = 0; i < n; ++i) {
+            int j = i + 1 < n ? i + 1 : 0;
+            const clip_vert *a = &src[i], *b = &src[j];
+            mk_real da = dist[i], db = dist[j];
             int ina = da <= sp[q].slop, inb = db <= sp[q].slop;
             if (ina) dst[m++] = *a;
             if (ina == inb) continue;

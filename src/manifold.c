@@ -237,6 +237,35 @@ static void face_axis(const mk_hull *ha, const mk_hull *hb, const mk_pair *p, mk
     }
 }
 
+/* The same for two boxes, without their hull views: an edge axis is a face
+ * axis when the normal is one of A's axes (faces of A first, as SAT breaks
+ * ties) or one of B's; the face is the one the normal leaves A through, or
+ * enters B through. */
+static void box_face_axis(const mk_pair *p, mk_sat_result *sat)
+{
+    mk_real one = 1 - 64 * MK_REAL_EPSILON, n[3], nb[3];
+    mk_vec3 l = mk_mat3_tmul_v3(p->r, sat->normal);
+    int k;
+    n[0] = sat->normal.x, n[1] = sat->normal.y, n[2] = sat->normal.z;
+    nb[0] = l.x, nb[1] = l.y, nb[2] = l.z;
+    for (k = 0; k < 3; ++k) {
+        if (mk_fabs_(n[k]) >= one) {
+            sat->kind = MK_SAT_FACE_A;
+            sat->a = 2 * k + (n[k] > 0);
+            sat->b = -1;
+            return;
+        }
+    }
+    for (k = 0; k < 3; ++k) {
+        if (mk_fabs_(nb[k]) >= one) {
+            sat->kind = MK_SAT_FACE_B;
+            sat->a = -1;
+            sat->b = 2 * k + (nb[k] < 0);
+            return;
+        }
+    }
+}
+
 static mk_real min3(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
 
 /* The reference face `face` of polytope s (box or hull), in its own frame. */
@@ -313,19 +342,23 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     int boxes = a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX;
     opt.prefer_abs = MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
                                                 b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
-    if (boxes) mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p->r, p->t, &opt, &sat);
-    /* Boxes enter the general SAT (and the face check below) as mk_box_hull
-     * views: O(1), no allocation, the same indices as the 15-axis form. */
-    if (a->type == MK_SHAPE_BOX && (!boxes || sat.kind == MK_SAT_EDGES)) {
-        mk_box_hull_init(&va, a->u.half_extents);
-        ha = &va.hull;
+    if (boxes) {
+        mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p->r, p->t, &opt, &sat);
+        if (sat.kind == MK_SAT_EDGES) box_face_axis(p, &sat);
+    } else {
+        /* A box meets a hull as its mk_box_hull view: O(1), no allocation,
+         * the same indices as the 15-axis form. */
+        if (a->type == MK_SHAPE_BOX) {
+            mk_box_hull_init(&va, a->u.half_extents);
+            ha = &va.hull;
+        }
+        if (b->type == MK_SHAPE_BOX) {
+            mk_box_hull_init(&vb, b->u.half_extents);
+            hb = &vb.hull;
+        }
+        mk_sat(ha, hb, &p->r, p->t, &opt, &sat);
+        if (sat.kind == MK_SAT_EDGES) face_axis(ha, hb, p, &sat);
     }
-    if (b->type == MK_SHAPE_BOX && (!boxes || sat.kind == MK_SAT_EDGES)) {
-        mk_box_hull_init(&vb, b->u.half_extents);
-        hb = &vb.hull;
-    }
-    if (!boxes) mk_sat(ha, hb, &p->r, p->t, &opt, &sat);
-    if (sat.kind == MK_SAT_EDGES) face_axis(ha, hb, p, &sat);
     if (cache) cache->axis = sat.best - ra - rb > m->margin ? MK_SAT_NONE : (int)sat.kind;
     if (sat.best - ra - rb > m->margin) return MK_OK;
     m->normal = sat.normal;
@@ -398,15 +431,17 @@ static pair_fn pair_table(mk_shape_type ta, mk_shape_type tb)
 
 static mk_status check_transform(mk_transform x)
 {
+    /* A finite sum means four finite components (an infinite or NaN one
+     * would make it infinite or NaN). */
     if (!mk_v3_is_valid(x.p) || !mk_real_is_valid(x.q.x + x.q.y + x.q.z + x.q.w)) return MK_ERR_NOT_FINITE;
-    return mk_quat_is_valid(x.q) ? MK_OK : MK_ERR_BAD_ROTATION;
+    return mk_fabs_(mk_quat_len2(x.q) - 1) <= MK_QUAT_TOLERANCE ? MK_OK : MK_ERR_BAD_ROTATION;
 }
 
 /* Moves the reduced manifold from A's frame to world space; `swap` mirrors
  * it when the pair routine ran with the shapes exchanged. */
-static void finish(const mk_mf *m, mk_transform xa, const mk_pair *pair, int swap, mk_manifold *out)
+static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair *pair, int swap, mk_manifold *out)
 {
-    mk_mat3 R = mk_mat3_from_quat(xa.q); /* once, then 9 multiplications per point instead of a quaternion rotation */
+    mk_mat3 R = *ra;
     mk_vec3 n = mk_mat3_mul_v3(R, m->normal);
     int i;
     out->normal = swap ? mk_v3_neg(n) : n;
@@ -415,7 +450,7 @@ static void finish(const mk_mf *m, mk_transform xa, const mk_pair *pair, int swa
         const mk_mf_point *p = &m->p[i];
         mk_contact_point *c = &out->points[i];
         mk_vec3 pb = mk_v3_mad(p->pa, -p->depth, m->normal);
-        mk_vec3 wa = mk_v3_add(mk_mat3_mul_v3(R, p->pa), xa.p), wb = mk_v3_add(mk_mat3_mul_v3(R, pb), xa.p);
+        mk_vec3 wa = mk_v3_add(mk_mat3_mul_v3(R, p->pa), pa), wb = mk_v3_add(mk_mat3_mul_v3(R, pb), pa);
         mk_vec3 lb = mk_mat3_tmul_v3(pair->r, mk_v3_sub(pb, pair->t));
         c->depth = p->depth;
         c->flags = p->depth < 0 ? MK_CONTACT_SPECULATIVE : 0;
@@ -442,6 +477,7 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     pair_fn fn;
     int swap = 0;
     mk_pair p;
+    mk_mat3 ra;
     mk_mf m;
     if (!a || !b || !out) return MK_ERR_NULL;
     if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
@@ -462,15 +498,16 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
         xa = xb;
         xb = tx;
     }
-    xa.q = mk_quat_normalize(xa.q);
-    xb.q = mk_quat_normalize(xb.q);
-    p = mk_pair_make(a, xa, b, xb);
+    /* A's rotation once, exact for any accepted quaternion (gjk.h): it builds
+     * the pair and takes the manifold back to world space. */
+    ra = mk_rotation_of(xa.q);
+    p = mk_pair_in(a, ra, xa.p, b, xb);
     m.count = 0;
     m.margin = margin;
     m.cores_apart = 0;
     m.normal = mk_v3(0, 0, 1);
     if ((st = fn(&p, &m, cache)) != MK_OK) return st;
     mk_mf_reduce(&m);
-    finish(&m, xa, &p, swap, out);
+    finish(&m, &ra, xa.p, &p, swap, out);
     return MK_OK;
 }
