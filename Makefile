@@ -197,13 +197,21 @@ $(B)/tests/closed_forms_only: tests/without/closed_forms_only.c $(STATIC_LIB)
 # mk_run turns one command line into an echoed, ';'-terminated shell step, so
 # commands with arguments survive being collected in one variable. The steps
 # run one after another: benchmarks never share the CPU with each other.
-mk_run = echo '>> $(strip $(1))'; $(strip $(1));
+mk_run = $(eval MK_RUN_TALLY += x x $(foreach w,$(1) $(1),x))echo '>> $(strip $(1))'; $(strip $(1));
 BENCH_DIR := $(B)/bench
 DEMO_BINS :=
 BENCH_RUNS :=
 DEMO_RUNS :=
 CHECK_BINS :=
 -include $(sort $(wildcard demos/*.mk adapters/*/*.mk))
+# A fragment that appends a bare command instead of $(call mk_run,...) glues
+# it onto its neighbour's arguments and breaks `make demo` / `make bench`.
+# mk_run keeps a tally with as many words as each step it writes, so any
+# word that did not come through mk_run is caught when the Makefile is read
+# (make check reads it too).
+ifneq ($(words $(DEMO_RUNS) $(BENCH_RUNS)),$(words $(MK_RUN_TALLY)))
+$(error DEMO_RUNS or BENCH_RUNS has a command not wrapped in $$(call mk_run,...): check demos/*.mk and adapters/*/*.mk)
+endif
 # The `tests` rule above was read before the fragments filled CHECK_BINS.
 tests: $(CHECK_BINS)
 

@@ -18,5 +18,5 @@ $(B)/demos/bench_broadphase: demos/bench_broadphase.cc $(B)/demos/bench_broadpha
 
 -include $(B)/demos/bench_broadphase.d $(B)/demos/bench_broadphase_minko.d
 DEMO_BINS += $(B)/demos/bench_broadphase
-BENCH_RUNS += $(B)/demos/bench_broadphase --json $(BENCH_DIR)/broad.jsonl
-DEMO_RUNS += $(B)/demos/bench_broadphase --quick --json $(BENCH_DIR)/broad_quick.jsonl
+BENCH_RUNS += $(call mk_run,$(B)/demos/bench_broadphase --json $(BENCH_DIR)/broad.jsonl)
+DEMO_RUNS += $(call mk_run,$(B)/demos/bench_broadphase --quick --json $(BENCH_DIR)/broad_quick.jsonl)
