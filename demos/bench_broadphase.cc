@@ -10,8 +10,8 @@
 //
 //   bench_broadphase [--quick] [--json FILE] [--reps R] [--only SCENE] [--n N] [--backend NAME] [--budget MS]
 // (--budget: time per backend and scene over all repetitions, default 12000;
-//  --skip NAME leaves one backend out, e.g. bullet.axis_sweep3_32 at n = 100k,
-//  whose proxy creation alone is quadratic: minutes per scene)
+//  --skip NAME[,NAME...] leaves backends out, e.g. bullet.axis_sweep3_32 at
+//  n = 100k, whose proxy creation alone is quadratic: minutes per scene)
 // (--backend runs one backend, for profiling with callgrind; no ratios then)
 //
 // Output: JSON Lines per ../shared/BENCH_FORMAT.md (suite "broad") and a table.
@@ -237,16 +237,15 @@ struct MinkoBackend : Backend {
     const char *name() const { return label; }
     bool setup(const Scene &s) {
         m = bb_minko_create(kind, s.n, s.frames[0].box.data(), s.is_static.data());
-        if (!m) return false;
-        Pairs tmp((size_t)s.n * 64);
-        return bb_minko_frame(m, s.frames[0].box.data(), nullptr, 0, nullptr, 0, tmp.data(), (long)tmp.size()) >= 0;
+        return m && bb_minko_frame(m, s.frames[0].box.data(), nullptr, 0, nullptr, 0) >= 0;
     }
+    // out keeps last frame's size: resizing it zero-fills only the growth,
+    // not a whole buffer every frame (that memset is no broadphase's work).
     bool frame(const Scene &, const Frame &f, Pairs &out) {
-        out.resize(out.capacity());
-        long np = bb_minko_frame(m, f.box.data(), f.moved.data(), (int)f.moved.size(), f.respawned.data(), (int)f.respawned.size(),
-                                 out.data(), (long)out.capacity());
+        long np = bb_minko_frame(m, f.box.data(), f.moved.data(), (int)f.moved.size(), f.respawned.data(), (int)f.respawned.size());
         if (np < 0) return false;
         out.resize((size_t)np);
+        bb_minko_pairs(m, out.data());
         return true;
     }
     long candidates() const { return bb_minko_candidates(m); }
@@ -526,6 +525,15 @@ static double floor_ms(const Scene &s)
 
 struct Plan { std::string scene; int n, frames; };
 
+// Is name one of the comma-separated names in list?
+static bool listed(const char *list, const char *name)
+{
+    size_t len = std::strlen(name);
+    for (const char *p = list; p && *p; p = std::strchr(p, ',') ? std::strchr(p, ',') + 1 : nullptr)
+        if (!std::strncmp(p, name, len) && (p[len] == ',' || p[len] == '\0')) return true;
+    return false;
+}
+
 int main(int argc, char **argv)
 {
     bool quick = false;
@@ -576,7 +584,7 @@ int main(int argc, char **argv)
                 if (left[b] <= 0) continue;
                 if (only_backend || skip_backend) {
                     std::unique_ptr<Backend> probe(make_backend(b));
-                    if ((only_backend && std::strcmp(probe->name(), only_backend)) || (skip_backend && !std::strcmp(probe->name(), skip_backend))) {
+                    if ((only_backend && std::strcmp(probe->name(), only_backend)) || (skip_backend && listed(skip_backend, probe->name()))) {
                         res[b].backend = probe->name();
                         res[b].failed = true;
                         continue;

@@ -16,11 +16,11 @@ typedef struct bb_minko bb_minko;
 
 /* kind: MK_BP_SAP, MK_BP_HGRID or MK_BP_AUTO. NULL on failure. */
 bb_minko *bb_minko_create(int kind, int n, const double *box, const unsigned char *is_static);
-/* One frame: new boxes for `moved`, destroy + create for `respawned`, update,
- * then the pair set as object indices into out (room for cap); returns the
- * pair count, or -1 on a Minko error (printed). */
-long bb_minko_frame(bb_minko *m, const double *box, const int *moved, int n_moved, const int *respawned, int n_respawned,
-                    uint64_t *out, long cap);
+/* One frame: new boxes for `moved`, destroy + create for `respawned`,
+ * update; returns the pair count, or -1 on a Minko error (printed). */
+long bb_minko_frame(bb_minko *m, const double *box, const int *moved, int n_moved, const int *respawned, int n_respawned);
+/* The pair set of the last frame as object indices (room for its count). */
+void bb_minko_pairs(const bb_minko *m, uint64_t *out);
 size_t bb_minko_bytes(const bb_minko *m);
 const char *bb_minko_kind(const bb_minko *m);
 /* Pairs the structure holds (the grid: candidates sharing a cell). */

@@ -53,10 +53,8 @@ bb_minko *bb_minko_create(int kind, int n, const double *box, const unsigned cha
     return m;
 }
 
-long bb_minko_frame(bb_minko *m, const double *box, const int *moved, int n_moved, const int *respawned, int n_respawned,
-                    uint64_t *out, long cap)
+long bb_minko_frame(bb_minko *m, const double *box, const int *moved, int n_moved, const int *respawned, int n_respawned)
 {
-    const mk_bp_pair *p;
     int i, np;
     for (i = 0; i < n_moved; ++i)
         if (report("move", mk_bp_move_proxy(m->bp, m->id[moved[i]], box_of(box + 6 * moved[i])))) return -1;
@@ -65,13 +63,18 @@ long bb_minko_frame(bb_minko *m, const double *box, const int *moved, int n_move
         if (report("destroy", mk_bp_destroy_proxy(m->bp, m->id[o])) || add(m, box, o)) return -1;
     }
     if (report("update", mk_bp_update(m->bp))) return -1;
-    p = mk_bp_pairs(m->bp, &np);
-    if (np > cap) return -1;
+    mk_bp_pairs(m->bp, &np);
+    return np;
+}
+
+void bb_minko_pairs(const bb_minko *m, uint64_t *out)
+{
+    int i, np;
+    const mk_bp_pair *p = mk_bp_pairs(m->bp, &np);
     for (i = 0; i < np; ++i) {
         uint64_t a = (uint64_t)m->obj[MK_BP_SLOT(p[i].a)], b = (uint64_t)m->obj[MK_BP_SLOT(p[i].b)];
         out[i] = a < b ? a << 32 | b : b << 32 | a;
     }
-    return np;
 }
 
 size_t bb_minko_bytes(const bb_minko *m)

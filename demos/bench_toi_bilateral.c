@@ -25,7 +25,12 @@
 #define BL_MAX_ITERATIONS 128 /* mk_toi's cap on distance queries */
 #define BL_MAX_PUSH_BACK 8    /* Box2D: b2_maxPolygonVertices */
 #define BL_MAX_ROOT 50        /* Box2D's root finder cap */
-#define BL_TOL_FLOOR (MK_REAL(1e4) * MK_REAL_EPSILON)
+/* mk_toi's tolerance floor (toi.c: the accuracy of the distance queries). */
+#if defined(MK_SINGLE)
+#  define BL_TOL_FLOOR (MK_REAL(1e2) * MK_REAL_EPSILON)
+#else
+#  define BL_TOL_FLOOR (MK_REAL(1e4) * MK_REAL_EPSILON)
+#endif
 
 typedef struct bl_body {
     const mk_shape *s;

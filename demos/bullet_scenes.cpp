@@ -15,7 +15,11 @@
 // Timing: external steady_clock timers around stepSimulation and around the
 // collision world's virtual updateAabbs / computeOverlappingPairs /
 // performDiscreteCollisionDetection; the referee and the counters run outside
-// the timed region.
+// the timed region. The backends of a scene run side by side, one step each
+// in turn, so load on a shared machine falls on all of them alike. With
+// --trials N every scene runs N times from slightly perturbed starts and each
+// figure is the median (tunnelling the worst): resting stacks creep in a
+// direction set by round-off, so one run says little about drift.
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
@@ -106,6 +110,8 @@ const int kBackendCount = (int)(sizeof kBackends / sizeof kBackends[0]);
 
 // Which Minko broadphase structure the minko backends use (--bp).
 mk_bp_kind g_bp_kind = MK_BP_AUTO;
+// The penetration referee runs (--no-referee leaves it out, for profiling).
+bool g_referee = true;
 
 // Everything one world needs, built for one backend and torn down in reverse.
 struct Pipeline {
@@ -587,6 +593,7 @@ struct Result {
     int tunnelled = 0, referee_failures = 0;
     double divergence = -1;                              // max |p - p_native| at the end
     long minko_pairs = -1, native_pairs = -1;            // Minko narrowphase: algorithms on Minko / left to Bullet
+    int trials = 1;                                      // figures are medians over this many perturbed runs
     std::vector<btVector3> end_pos;
 };
 
@@ -696,30 +703,115 @@ double kinetic_energy(const std::vector<btRigidBody *> &bodies)
     return ke;
 }
 
-Result run(const SceneSpec &scene, const Backend &backend, int steps)
-{
-    Result res;
-    res.backend = std::string(kBulletTag) + "." + backend.name;
-    res.steps = steps;
-    Pipeline p(backend);
-    btDiscreteDynamicsWorld *world = p.world;
-    world->setGravity(btVector3(0, -10, 0));
-    world->getSolverInfo().m_numIterations = scene.iterations;
-    if (scene.friction_caching) world->getSolverInfo().m_solverMode |= SOLVER_ENABLE_FRICTION_DIRECTION_CACHING;
+// One scene on one backend: the world, its bodies and what is measured. The
+// backends of a scene advance together, one step each in turn, so a load
+// spike on a shared machine hits them all alike and their ratios hold.
+class Run {
+public:
+    // Trial 0 is the scene as specified; trial k > 0 moves every dynamic
+    // body's start by up to 1e-3 of its bounding radius per axis (seeded by
+    // k and the body, the same for every backend).
+    Run(const SceneSpec &scene, const Backend &backend, int steps, int trial)
+        : m_scene(scene), m_pipe(backend), m_steps(steps), m_trial(trial),
+          m_drift_step(scene.drift_from < 0 ? -1 : (int)(scene.drift_from * steps))
+    {
+        m_res.backend = std::string(kBulletTag) + "." + backend.name;
+        m_res.steps = steps;
+        btDiscreteDynamicsWorld *world = m_pipe.world;
+        world->setGravity(btVector3(0, -10, 0));
+        world->getSolverInfo().m_numIterations = scene.iterations;
+        if (scene.friction_caching) world->getSolverInfo().m_solverMode |= SOLVER_ENABLE_FRICTION_DIRECTION_CACHING;
+        for (const BodySpec &bs : scene.bodies) add_body(bs);
+        m_res.bodies = scene.dynamic_count();
+    }
+    ~Run()
+    {
+        for (btRigidBody *b : m_bodies) {
+            m_pipe.world->removeRigidBody(b);
+            delete b;
+        }
+    }
+    Run(const Run &) = delete;
+    Run &operator=(const Run &) = delete;
 
-    std::vector<btRigidBody *> bodies;
-    for (const BodySpec &bs : scene.bodies) {
-        btCollisionShape *shape = scene.shapes[bs.shape];
+    void step(int step)
+    {
+        btDiscreteDynamicsWorld *world = m_pipe.world;
+        if (step == m_drift_step)
+            for (btRigidBody *b : m_bodies) m_drift_ref.push_back(b->getWorldTransform().getOrigin());
+        m_pipe.timers->reset();
+        Clock::time_point t0 = Clock::now();
+        world->stepSimulation(m_scene.dt, 0);
+        m_t_step.push_back(ms_since(t0));
+        m_t_coll.push_back(m_pipe.timers->collision_ms);
+        m_t_bp.push_back(m_pipe.timers->aabb_ms + m_pipe.timers->pairs_ms);
+
+        m_sum_pairs += world->getPairCache()->getNumOverlappingPairs();
+        btDispatcher *d = world->getDispatcher();
+        for (int m = 0; m < d->getNumManifolds(); m++) {
+            int n = d->getManifoldByIndexInternal(m)->getNumContacts();
+            m_sum_manifolds += n > 0;
+            m_sum_points += n;
+        }
+        if (g_referee && (step % m_scene.judge_every == 0 || step == m_steps - 1))
+            m_res.max_penetration =
+                std::max(m_res.max_penetration, referee_penetration(world, &m_referee, &m_res.referee_failures));
+    }
+
+    Result finish()
+    {
+        Result &res = m_res;
+        res.ms = median(m_t_step);
+        res.collision_ms = median(m_t_coll);
+        res.broadphase_ms = median(m_t_bp);
+        res.ms_mean = mean(m_t_step);
+        res.collision_ms_mean = mean(m_t_coll);
+        res.pairs = m_sum_pairs / m_steps;
+        res.manifolds = m_sum_manifolds / m_steps;
+        res.points = m_sum_points / m_steps;
+        res.ke_end = kinetic_energy(m_bodies);
+        if (m_pipe.minko_config) {
+            res.minko_pairs = m_pipe.minko_config->stats.minko_algorithms.load();
+            res.native_pairs = m_pipe.minko_config->stats.native_fallbacks.load();
+        }
+        if (m_drift_step >= 0) {
+            res.drift = 0;
+            for (size_t i = 0; i < m_bodies.size(); i++)
+                if (m_bodies[i]->getInvMass() > 0)
+                    res.drift = std::max(res.drift, (double)(m_bodies[i]->getWorldTransform().getOrigin() - m_drift_ref[i]).length());
+        }
+        for (size_t i = 0; i < m_bodies.size(); i++) {
+            const BodySpec &bs = m_scene.bodies[i];
+            btVector3 o = m_bodies[i]->getWorldTransform().getOrigin();
+            res.end_pos.push_back(o);
+            if (bs.has_keep && bs.keep_n.dot(o) > bs.keep_d) res.tunnelled++;
+        }
+        return res;
+    }
+
+private:
+    void add_body(const BodySpec &bs)
+    {
+        btCollisionShape *shape = m_scene.shapes[bs.shape];
         btVector3 inertia(0, 0, 0);
         if (bs.mass > 0) shape->calculateLocalInertia(bs.mass, inertia);
         btRigidBody::btRigidBodyConstructionInfo info(bs.mass, nullptr, shape, inertia);
         info.m_startWorldTransform = bs.xf;
-        info.m_friction = scene.friction;
+        if (m_trial > 0 && bs.mass > 0) {
+            Rng rng(0x5EED0000ull * (unsigned long long)m_trial + m_bodies.size());
+            btVector3 c;
+            btScalar r;
+            shape->getBoundingSphere(c, r);
+            const btScalar e = btScalar(1e-3) * r;
+            info.m_startWorldTransform.getOrigin() +=
+                btVector3((btScalar)rng.range(-e, e), (btScalar)rng.range(-e, e), (btScalar)rng.range(-e, e));
+        }
+        info.m_friction = m_scene.friction;
         btRigidBody *body = new btRigidBody(info);
         if (bs.mass > 0) {
             body->setLinearVelocity(bs.v);
             body->setAngularVelocity(bs.w);
-            if (!scene.sleep) body->setActivationState(DISABLE_DEACTIVATION);
+            if (!m_scene.sleep) body->setActivationState(DISABLE_DEACTIVATION);
             if (bs.ccd) {
                 btVector3 c;
                 btScalar r;
@@ -728,67 +820,42 @@ Result run(const SceneSpec &scene, const Backend &backend, int steps)
                 body->setCcdSweptSphereRadius(r * btScalar(0.8));
             }
         }
-        world->addRigidBody(body);
-        bodies.push_back(body);
-    }
-    res.bodies = scene.dynamic_count();
-
-    const int drift_step = scene.drift_from < 0 ? -1 : (int)(scene.drift_from * steps);
-    std::vector<btVector3> drift_ref;
-    std::vector<double> t_step, t_coll, t_bp;
-    Referee referee;
-    double sum_pairs = 0, sum_manifolds = 0, sum_points = 0;
-    for (int step = 0; step < steps; step++) {
-        if (step == drift_step)
-            for (btRigidBody *b : bodies) drift_ref.push_back(b->getWorldTransform().getOrigin());
-        p.timers->reset();
-        Clock::time_point t0 = Clock::now();
-        world->stepSimulation(scene.dt, 0);
-        t_step.push_back(ms_since(t0));
-        t_coll.push_back(p.timers->collision_ms);
-        t_bp.push_back(p.timers->aabb_ms + p.timers->pairs_ms);
-
-        sum_pairs += world->getPairCache()->getNumOverlappingPairs();
-        btDispatcher *d = world->getDispatcher();
-        for (int m = 0; m < d->getNumManifolds(); m++) {
-            int n = d->getManifoldByIndexInternal(m)->getNumContacts();
-            sum_manifolds += n > 0;
-            sum_points += n;
-        }
-        if (step % scene.judge_every == 0 || step == steps - 1)
-            res.max_penetration = std::max(res.max_penetration, referee_penetration(world, &referee, &res.referee_failures));
-    }
-    res.ms = median(t_step);
-    res.collision_ms = median(t_coll);
-    res.broadphase_ms = median(t_bp);
-    res.ms_mean = mean(t_step);
-    res.collision_ms_mean = mean(t_coll);
-    res.pairs = sum_pairs / steps;
-    res.manifolds = sum_manifolds / steps;
-    res.points = sum_points / steps;
-    res.ke_end = kinetic_energy(bodies);
-    if (p.minko_config) {
-        res.minko_pairs = p.minko_config->stats.minko_algorithms.load();
-        res.native_pairs = p.minko_config->stats.native_fallbacks.load();
-    }
-    if (drift_step >= 0) {
-        res.drift = 0;
-        for (size_t i = 0; i < bodies.size(); i++)
-            if (bodies[i]->getInvMass() > 0)
-                res.drift = std::max(res.drift, (double)(bodies[i]->getWorldTransform().getOrigin() - drift_ref[i]).length());
-    }
-    for (size_t i = 0; i < bodies.size(); i++) {
-        const BodySpec &bs = scene.bodies[i];
-        btVector3 o = bodies[i]->getWorldTransform().getOrigin();
-        res.end_pos.push_back(o);
-        if (bs.has_keep && bs.keep_n.dot(o) > bs.keep_d) res.tunnelled++;
+        m_pipe.world->addRigidBody(body);
+        m_bodies.push_back(body);
     }
 
-    for (btRigidBody *b : bodies) {
-        world->removeRigidBody(b);
-        delete b;
+    const SceneSpec &m_scene;
+    Pipeline m_pipe;
+    const int m_steps, m_trial, m_drift_step;
+    Result m_res;
+    std::vector<btRigidBody *> m_bodies;
+    std::vector<btVector3> m_drift_ref;
+    std::vector<double> m_t_step, m_t_coll, m_t_bp;
+    Referee m_referee;
+    double m_sum_pairs = 0, m_sum_manifolds = 0, m_sum_points = 0;
+};
+
+// Each figure's median over the trials, but tunnelled bodies the worst trial's
+// and referee failures summed (end positions: the first trial's).
+Result median_of(const std::vector<Result> &trials)
+{
+    Result r = trials[0];
+    auto med = [&trials](double Result::*f) {
+        std::vector<double> v;
+        for (const Result &t : trials) v.push_back(t.*f);
+        return median(v);
+    };
+    for (double Result::*f : {&Result::ms, &Result::collision_ms, &Result::broadphase_ms, &Result::ms_mean,
+                              &Result::collision_ms_mean, &Result::pairs, &Result::manifolds, &Result::points,
+                              &Result::max_penetration, &Result::drift, &Result::ke_end, &Result::divergence})
+        r.*f = med(f);
+    r.referee_failures = 0;
+    for (const Result &t : trials) {
+        r.tunnelled = std::max(r.tunnelled, t.tunnelled);
+        r.referee_failures += t.referee_failures;
     }
-    return res;
+    r.trials = (int)trials.size();
+    return r;
 }
 
 // ---- output ---------------------------------------------------------------------
@@ -826,6 +893,7 @@ void write_json(FILE *f, const SceneSpec &s, const Result &r)
                  "\"tunnelled\":%d",
                  s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.steps, r.bodies, r.ms, r.collision_ms,
                  r.broadphase_ms, r.ms_mean, r.collision_ms_mean, r.pairs, r.manifolds, r.points, r.max_penetration, r.ke_end, r.tunnelled);
+    if (r.trials > 1) std::fprintf(f, ",\"trials\":%d", r.trials);
     if (r.drift >= 0) std::fprintf(f, ",\"drift\":%.6g", r.drift);
     if (r.divergence >= 0) std::fprintf(f, ",\"divergence_from_native\":%.6g", r.divergence);
     if (r.referee_failures) std::fprintf(f, ",\"failures\":%d", r.referee_failures);
@@ -840,8 +908,12 @@ void usage(const char *argv0)
                  "usage: %s [--quick] [--json FILE] [--scene ID]... [--backend NAME]... [--steps N] [--bp KIND] [--list]\n"
                  "  --quick      a few-second subset (fewer scenes and steps)\n"
                  "  --scene ID   run only these scenes (repeatable; see --list)\n"
-                 "  --backend N  run only these backends (repeatable; native always runs first as the reference)\n"
+                 "  --backend N  run only these backends (repeatable; native runs too unless --no-native)\n"
+                 "  --no-native  leave out the native reference (for profiling one backend)\n"
+                 "  --no-referee no penetration referee (max_pen reads 0; for profiling)\n"
                  "  --steps N    override every scene's step count\n"
+                 "  --trials N   run each scene N times, starts perturbed by 1e-3 of each body's size\n"
+                 "               from the second on; every figure is the median over the trials\n"
                  "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n",
                  argv0);
 }
@@ -850,18 +922,21 @@ void usage(const char *argv0)
 
 int main(int argc, char **argv)
 {
-    bool quick = false, list = false;
+    bool quick = false, list = false, no_native = false;
     const char *json = nullptr;
-    int steps_override = 0;
+    int steps_override = 0, trials = 1;
     std::vector<std::string> only_scenes, only_backends;
     for (int i = 1; i < argc; i++) {
         std::string a = argv[i];
         if (a == "--quick") quick = true;
         else if (a == "--list") list = true;
+        else if (a == "--no-native") no_native = true;
+        else if (a == "--no-referee") g_referee = false;
         else if (a == "--json" && i + 1 < argc) json = argv[++i];
         else if (a == "--scene" && i + 1 < argc) only_scenes.push_back(argv[++i]);
         else if (a == "--backend" && i + 1 < argc) only_backends.push_back(argv[++i]);
         else if (a == "--steps" && i + 1 < argc) steps_override = std::atoi(argv[++i]);
+        else if (a == "--trials" && i + 1 < argc) trials = std::max(1, std::atoi(argv[++i]));
         else if (a == "--bp" && i + 1 < argc) {
             std::string k = argv[++i];
             g_bp_kind = k == "sap" ? MK_BP_SAP : k == "hgrid" ? MK_BP_HGRID : k == "brute" ? MK_BP_BRUTE : MK_BP_AUTO;
@@ -894,21 +969,42 @@ int main(int argc, char **argv)
         e.make(scene, e.arg);
         if (quick && scene.quick_steps == 0 && only_scenes.empty()) continue;
         int steps = steps_override > 0 ? steps_override : (quick && scene.quick_steps ? scene.quick_steps : scene.steps);
-        Result native;
+        // Every selected backend, native first; stepped in turn, the first
+        // of each round rotating so none always runs on the others' cache.
+        std::vector<int> picked;
         for (int b = 0; b < kBackendCount; b++) {
             const Backend &be = kBackends[b];
             if (be.minko_ccd && !scene.uses_ccd()) continue;
+            if (b == 0 && no_native) continue;
             if (b > 0 && !only_backends.empty() &&
                 std::find(only_backends.begin(), only_backends.end(), be.name) == only_backends.end())
                 continue;
-            Result r = run(scene, be, steps);
-            if (b == 0) {
-                native = r;
-            } else {
-                r.divergence = 0;
-                for (size_t i = 0; i < r.end_pos.size(); i++)
-                    r.divergence = std::max(r.divergence, (double)(r.end_pos[i] - native.end_pos[i]).length());
+            picked.push_back(b);
+        }
+        // per_backend[k][t]: backend picked[k] in trial t.
+        std::vector<std::vector<Result>> per_backend(picked.size());
+        for (int t = 0; t < trials; t++) {
+            std::vector<Run *> runs;
+            for (int b : picked) runs.push_back(new Run(scene, kBackends[b], steps, t));
+            for (int step = 0; step < steps; step++)
+                for (size_t k = 0; k < runs.size(); k++) runs[(k + (size_t)step) % runs.size()]->step(step);
+            for (size_t k = 0; k < runs.size(); k++) {
+                per_backend[k].push_back(runs[k]->finish());
+                delete runs[k];
             }
+            if (picked[0] == 0)
+                for (size_t k = 1; k < runs.size(); k++) {
+                    Result &r = per_backend[k].back();
+                    const Result &native = per_backend[0].back();
+                    r.divergence = 0;
+                    for (size_t i = 0; i < r.end_pos.size(); i++)
+                        r.divergence = std::max(r.divergence, (double)(r.end_pos[i] - native.end_pos[i]).length());
+                }
+        }
+        Result native;
+        for (size_t k = 0; k < picked.size(); k++) {
+            Result r = median_of(per_backend[k]);
+            if (picked[k] == 0) native = r;
             print_row(scene, r, native);
             if (out) write_json(out, scene, r);
             std::fflush(stdout);

@@ -308,7 +308,7 @@ static void finish_forgotten(mk_bp *bp)
         uint32_t st = t->e[i].state & ~(uint32_t)(MK_PS_TOUCHED | MK_PS_REPORTED);
         if (st & MK_PS_LIVE) st |= MK_PS_REPORTED;
         t->e[i].state = st;
-        if (!(st & (MK_PS_LIVE | MK_PS_CAND))) t->scratch2[nd++] = t->e[i].key;
+        if (!(st & MK_PS_KEEP)) t->scratch2[nd++] = t->e[i].key;
     }
     t->touched_count = 0;
     for (i = 0; i < nd; ++i) erase(t, t->scratch2[i]);
@@ -408,7 +408,7 @@ mk_status mk_pairs_finish_(mk_bp *bp)
         uint32_t s = e->state & ~(uint32_t)(MK_PS_TOUCHED | MK_PS_REPORTED);
         if (s & MK_PS_LIVE) s |= MK_PS_REPORTED;
         e->state = s;
-        if (!(s & (MK_PS_LIVE | MK_PS_CAND))) t->scratch2[nd++] = e->key;
+        if (!(s & MK_PS_KEEP)) t->scratch2[nd++] = e->key;
     }
     t->touched_count = 0;
     for (i = 0; i < nd; ++i) erase(t, t->scratch2[i]);

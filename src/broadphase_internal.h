@@ -28,7 +28,9 @@ enum {
     MK_PS_REPORTED = 2,  /* in the set given out by the last update */
     MK_PS_TOUCHED = 4,   /* in pairs.touched */
     MK_PS_CAND = 16,     /* grid: the two proxies share a cell */
-    MK_PS_REJECTED = 32  /* grid: overlapping but the filter said no */
+    MK_PS_REJECTED = 32, /* grid: overlapping but the filter said no */
+    MK_PS_STATIC = 64,   /* grid: overlapping, found through the static index */
+    MK_PS_KEEP = MK_PS_LIVE | MK_PS_CAND | MK_PS_STATIC /* entries without these go */
 };
 
 /* wake: the grid's re-test threshold on the two proxies' summed travel (0 = test). */

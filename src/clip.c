@@ -626,14 +626,15 @@ void mk_mf_from_hit(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk_hit
  * not change between frames (Box3D uses the same idea). */
 #define REDUCE_BIAS MK_REAL(0.95)
 
-static mk_real area(mk_vec3 n, mk_vec3 a, mk_vec3 b, mk_vec3 c)
-{
-    return mk_v3_dot(mk_v3_cross(mk_v3_sub(b, a), mk_v3_sub(c, a)), n);
-}
+/* The signed area of triangle (a, b, p) seen along n, doubled, is
+ * (b - a) x (p - a) . n = (n x (b - a)) . (p - a): one cross product per
+ * side of the patch, then one dot product per candidate. */
+static mk_vec3 side(mk_vec3 n, mk_vec3 a, mk_vec3 b) { return mk_v3_cross(n, mk_v3_sub(b, a)); }
+static mk_real area(mk_vec3 side_ab, mk_vec3 a, mk_vec3 p) { return mk_v3_dot(side_ab, mk_v3_sub(p, a)); }
 
 void mk_mf_reduce(mk_mf *m)
 {
-    mk_vec3 n = m->normal;
+    mk_vec3 n = m->normal, p0, p1, p2, s01, s12, s20;
     mk_real extent = 0, best, sign;
     int i, k[4] = {0, -1, -1, -1}, count;
     mk_mf_point keep[4];
@@ -641,26 +642,30 @@ void mk_mf_reduce(mk_mf *m)
     for (i = 1; i < m->count; ++i) extent = mk_max(extent, mk_v3_max_abs(mk_v3_sub(m->p[i].pa, m->p[0].pa)));
     for (i = 1; i < m->count; ++i)
         if (m->p[i].depth > m->p[k[0]].depth + 64 * MK_REAL_EPSILON * extent) k[0] = i;
+    p0 = m->p[k[0]].pa;
     for (best = 0, i = 0; i < m->count; ++i) {
-        mk_vec3 d = mk_v3_sub(m->p[i].pa, m->p[k[0]].pa);
+        mk_vec3 d = mk_v3_sub(m->p[i].pa, p0);
         mk_real s = mk_v3_len2(mk_v3_mad(d, -mk_v3_dot(d, n), n));
         if (s * REDUCE_BIAS * REDUCE_BIAS > best) { best = s; k[1] = i; }
     }
     if (k[1] < 0) k[1] = k[0] == 0 ? 1 : 0; /* all candidates coincide */
+    p1 = m->p[k[1]].pa;
+    s01 = side(n, p0, p1);
     for (best = 0, i = 0; i < m->count; ++i) {
-        mk_real s = mk_fabs_(area(n, m->p[k[0]].pa, m->p[k[1]].pa, m->p[i].pa));
+        mk_real s = mk_fabs_(area(s01, p0, m->p[i].pa));
         if (s * REDUCE_BIAS > best) { best = s; k[2] = i; }
     }
     count = 2;
     if (k[2] >= 0) {
         count = 3;
-        sign = area(n, m->p[k[0]].pa, m->p[k[1]].pa, m->p[k[2]].pa) > 0 ? 1 : -1;
+        p2 = m->p[k[2]].pa;
+        sign = area(s01, p0, p2) > 0 ? 1 : -1;
+        s12 = side(n, p1, p2);
+        s20 = side(n, p2, p0);
         for (best = 0, i = 0; i < m->count; ++i) {
-            /* How far outside the triangle's edges p lies: the area it adds to the patch. */
+            /* How far outside the triangle's sides p lies: the area it adds to the patch. */
             mk_vec3 p = m->p[i].pa;
-            mk_real s = -sign * area(n, m->p[k[0]].pa, m->p[k[1]].pa, p);
-            s = mk_max(s, -sign * area(n, m->p[k[1]].pa, m->p[k[2]].pa, p));
-            s = mk_max(s, -sign * area(n, m->p[k[2]].pa, m->p[k[0]].pa, p));
+            mk_real s = mk_max(-sign * area(s01, p0, p), mk_max(-sign * area(s12, p1, p), -sign * area(s20, p2, p)));
             if (s * REDUCE_BIAS > best) { best = s; k[3] = i; }
         }
         if (k[3] >= 0) count = 4;

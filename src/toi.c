@@ -262,7 +262,7 @@ static mk_transform body_pose(const toi_body *b, mk_vec3 origin) { return mk_tra
 /* Support point of the solid along world direction m (not unit), as an
  * offset from the rotation centre. A plane cannot turn and is only ever
  * asked along its outward normal: the answer is the foot of the centre. */
-static mk_vec3 support_rel(toi_body *b, mk_vec3 m)
+MK_ALWAYS_INLINE mk_vec3 support_rel(toi_body *b, mk_vec3 m)
 {
     mk_vec3 p, w;
     mk_real l;

@@ -491,6 +491,67 @@ START_TEST(region_and_ray_queries)
 }
 END_TEST
 
+/* The grid's static index: mostly statics in two far-apart clusters (the
+ * index hashes its cells then) or one (a dense array of cells), slow and
+ * fast movers among them (every one fast: the grid files them a level
+ * coarser); now and then a static moves (it leaves the index) or one goes
+ * and another comes (enough of that rebuilds the index); the filter refuses
+ * some pairs; region queries see indexed statics. */
+static void run_statics(uint64_t seed, double apart, int fast_every)
+{
+    static world w;
+    static hits h;
+    int i, f, k, q;
+    if (!world_init(&w, seed, MAXN, 1)) return;
+    for (i = 0; i < 400; ++i) {
+        mk_aabb b = random_box(&w.rng, 12, 0.3, 3);
+        mk_vec3 off = mk_v3((mk_real)(i % 2 ? apart : 0), 0, 0);
+        add_obj(&w, mk_aabb_make(mk_v3_add(b.lo, off), mk_v3_add(b.hi, off)), i % 5 != 0);
+        w.o[i].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)(i % fast_every == 0 ? 0.4 : 0.03));
+    }
+    for (f = 0; f < 160; ++f) {
+        for (i = 0; i < w.n; ++i) {
+            if (!w.o[i].alive) continue;
+            if (!w.o[i].is_static) drift(&w, i, 1);
+            else if (mk_rng_unit(&w.rng) < 0.003) drift(&w, i, 3);
+        }
+        if (f % 2 == 0 && w.n < MAXN) { /* a static goes, another comes */
+            for (i = (int)(mk_rng_unit(&w.rng) * w.n); !w.o[i].alive || !w.o[i].is_static; i = (i + 1) % w.n) {}
+            kill_obj(&w, i);
+            add_obj(&w, w.o[i].box, 1);
+        }
+        step(&w, f);
+        for (q = 0; q < 4; ++q) {
+            mk_aabb box = random_box(&w.rng, 14, 0.5, 6);
+            int want[MAXN], nw = 0;
+            for (i = 0; i < w.n; ++i) if (w.o[i].alive && mk_aabb_overlap(w.o[i].box, box)) want[nw++] = i;
+            for (k = 0; k < NKIND; ++k) {
+                if (!w.bp[k]) continue;
+                h.n = 0;
+                MK_ASSERT_STATUS(mk_bp_query_aabb(w.bp[k], box, on_hit, &h), MK_OK);
+                qsort(h.seen, (size_t)h.n, sizeof(int), int_cmp);
+                ck_assert_msg(h.n == nw && memcmp(h.seen, want, sizeof(int) * (size_t)nw) == 0,
+                              "%s: region query found %d, truth %d (frame %d)", mk_bp_kind_name(kinds[k]), h.n, nw, f);
+            }
+        }
+    }
+    if (w.bp[2]) { /* the index was rebuilt: the grid rebuilt itself at least once */
+        mk_bp_stats st;
+        MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[2], &st), MK_OK);
+        ck_assert_int_gt(st.full_rebuilds, 1);
+    }
+    world_fini(&w);
+}
+
+START_TEST(static_index_dense) { run_statics(21, 0, 3); }
+END_TEST
+
+START_TEST(static_index_hashed) { run_statics(22, 5000, 3); }
+END_TEST
+
+START_TEST(static_index_fast_movers) { run_statics(23, 0, 1); }
+END_TEST
+
 /* A swept box and early clipping. */
 static mk_real clip_first(void *ctx, mk_bp_id id, void *user, mk_real t, mk_real max)
 {
@@ -721,6 +782,9 @@ static Suite *broadphase_suite(void)
     tcase_add_test(tc, filters_and_refilter);
     tcase_add_test(tc, filter_modes);
     tcase_add_test(tc, region_and_ray_queries);
+    tcase_add_test(tc, static_index_dense);
+    tcase_add_test(tc, static_index_hashed);
+    tcase_add_test(tc, static_index_fast_movers);
     tcase_add_test(tc, swept_box_and_clipping);
     tcase_add_test(tc, steady_state_does_not_allocate);
     tcase_add_test(tc, fixed_capacity_overflow_recovers);

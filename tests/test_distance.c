@@ -671,6 +671,30 @@ START_TEST(dispatch_reports_method)
 }
 END_TEST
 
+/* A cube's corner pointing at another cube's edge: the nearest features are a
+ * vertex and an edge, so no SAT axis (face normals, edge cross products)
+ * realises the distance and SAT's bound is strictly below it. The corner
+ * clamped into A is the nearest point, and the direction between the two
+ * certifies the answer without GJK: exact distance, normal across the edge. */
+START_TEST(box_corner_at_box_edge)
+{
+    mk_shape a, b;
+    mk_distance_result r;
+    mk_vec3 diag = mk_v3_normalize(mk_v3(1, 1, 1)), out = mk_v3_normalize(mk_v3(1, 1, 0));
+    mk_vec3 axis = mk_v3_normalize(mk_v3_cross(diag, mk_v3_neg(out)));
+    mk_quat q = mk_quat_from_axis_angle(axis, acos((double)mk_v3_dot(diag, mk_v3_neg(out))));
+    mk_real gap = MK_REAL(0.25), s3 = mk_sqrt_(3);
+    mk_shape_box(mk_v3(1, 1, 1), 0, &a);
+    mk_shape_box(mk_v3(1, 1, 1), 0, &b);
+    /* B's corner (1,1,1) now points along -out, from gap beyond A's edge (1, 1, z). */
+    r = dist_ok(&a, xfq(mk_v3(0, 0, 0.5), mk_quat_identity()), &b,
+                xfq(mk_v3_add(mk_v3(1, 1, 0.5), mk_v3_scale(out, gap + s3)), q));
+    MK_ASSERT_NEAR(r.distance, gap, 64 * MK_REAL_EPSILON * 4); /* the boxes span about 4 */
+    MK_ASSERT_V3_NEAR(r.normal, out, 64 * MK_REAL_EPSILON);
+    ck_assert_int_eq(r.method, MK_METHOD_SAT);
+}
+END_TEST
+
 /* Seed 003: the nearest-vertex walk is a pair of vertices, so its distance
  * bounds the true one from above. */
 START_TEST(approx_distance_is_upper_bound)
@@ -707,6 +731,7 @@ static Suite *distance_suite(void)
     tcase_add_test(tc, bad_input_statuses);
     tcase_add_test(tc, dispatch_reports_method);
     tcase_add_test(tb, box_box_against_oracle);
+    tcase_add_test(tb, box_corner_at_box_edge);
     tcase_add_test(tb, approx_distance_is_upper_bound);
     tcase_add_test(tb, families_against_oracle);
     tcase_add_test(tb, hulls_against_oracle);

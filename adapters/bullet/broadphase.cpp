@@ -18,6 +18,90 @@ struct Broadphase::Proxy : public btBroadphaseProxy {
 
 namespace {
 
+// Bullet's btHashedOverlappingPairCache with the same deterministic dispatch
+// (pairs visited in descending (uid0, uid1) order, which is what Bullet's
+// quicksort with its ">" predicate gives, and Bullet's loop as it is,
+// removals included) without Bullet's quicksort of every pair every step:
+// the order of the last step is kept and reused while the pair array holds
+// the same pairs at the same places (a settled or sleeping scene: one O(n)
+// check), and otherwise rebuilt by a radix sort on keys packed to the uids'
+// width (O(n) per byte of key, three bytes up to 4096 proxies). Keys are
+// unique, so the order is exactly Bullet's. Memory: two arrays of the pair
+// count, grown by doubling, reused every step.
+class PairCache : public btHashedOverlappingPairCache {
+public:
+    using btHashedOverlappingPairCache::processAllOverlappingPairs;
+    void processAllOverlappingPairs(btOverlapCallback *callback, btDispatcher *dispatcher,
+                                    const btDispatcherInfo &info) override
+    {
+        if (!info.m_deterministicOverlappingPairs) {
+            btHashedOverlappingPairCache::processAllOverlappingPairs(callback, dispatcher, info);
+            return;
+        }
+        btBroadphasePairArray &pa = getOverlappingPairArray();
+        if (!order_still_valid(pa)) sort_by_uids(pa);
+        // m_order is ascending: walk it from the end.
+        for (size_t i = m_order.size(); i > 0;) {
+            btBroadphasePair *pair = &pa[m_order[i - 1].index];
+            if (callback->processOverlap(*pair)) {
+                removeOverlappingPair(pair->m_pProxy0, pair->m_pProxy1, dispatcher);
+                m_order_valid = false;
+            } else {
+                i--;
+            }
+        }
+    }
+
+private:
+    struct Entry {
+        unsigned u0, u1;  // uids (+ 1) of the pair at `index` when sorted
+        unsigned long long key;
+        int index;
+    };
+    // Bullet orders a missing proxy (uid -1) last: uid + 1.
+    static unsigned uid_of(const btBroadphaseProxy *p) { return (unsigned)((p ? p->m_uniqueId : -1) + 1); }
+
+    bool order_still_valid(const btBroadphasePairArray &pa) const
+    {
+        if (!m_order_valid || (size_t)pa.size() != m_order.size()) return false;
+        for (const Entry &e : m_order)
+            if (uid_of(pa[e.index].m_pProxy0) != e.u0 || uid_of(pa[e.index].m_pProxy1) != e.u1) return false;
+        return true;
+    }
+
+    void sort_by_uids(const btBroadphasePairArray &pa)
+    {
+        const size_t n = (size_t)pa.size();
+        m_order.resize(n);
+        m_tmp.resize(n);
+        unsigned top = 0;
+        for (size_t i = 0; i < n; i++) {
+            const btBroadphasePair &p = pa[(int)i];
+            m_order[i] = Entry{uid_of(p.m_pProxy0), uid_of(p.m_pProxy1), 0, (int)i};
+            top = std::max(top, std::max(m_order[i].u0, m_order[i].u1));
+        }
+        int bits = 1;
+        while (bits < 32 && (top >> bits) != 0) bits++;
+        for (Entry &e : m_order) e.key = (unsigned long long)e.u0 << bits | e.u1;
+        for (int shift = 0; shift < 2 * bits; shift += 8) {
+            size_t count[256] = {};
+            for (const Entry &e : m_order) count[(e.key >> shift) & 255]++;
+            size_t at = 0;
+            for (size_t &c : count) {
+                const size_t here = c;
+                c = at;
+                at += here;
+            }
+            for (const Entry &e : m_order) m_tmp[count[(e.key >> shift) & 255]++] = e;
+            m_order.swap(m_tmp);
+        }
+        m_order_valid = true;
+    }
+
+    std::vector<Entry> m_order, m_tmp;
+    bool m_order_valid = false;
+};
+
 mk_aabb to_aabb(const btVector3 &lo, const btVector3 &hi) { return mk_aabb_make(to_mk(lo), to_mk(hi)); }
 
 // Segment from + t (to - from), t in [0, 1], against [lo, hi]: closed slabs.
@@ -72,7 +156,7 @@ mk_real ray_visit(void *c, mk_bp_id, void *user, mk_real, mk_real max)
 Broadphase::Broadphase(mk_bp_kind kind, btHashedOverlappingPairCache *cache, int initial_capacity)
     : m_kind(kind), m_capacity(std::max(initial_capacity, 16)), m_cache(cache), m_own_cache(cache == nullptr)
 {
-    if (m_own_cache) m_cache = new (btAlignedAlloc(sizeof(btHashedOverlappingPairCache), 16)) btHashedOverlappingPairCache();
+    if (m_own_cache) m_cache = new (btAlignedAlloc(sizeof(PairCache), 16)) PairCache();
     note(rebuild(m_capacity));
 }
 

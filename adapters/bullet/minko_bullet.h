@@ -86,7 +86,10 @@ mk_transform minko_pose(const btTransform &world, const ShapeMap &map);
 class Broadphase : public btBroadphaseInterface {
 public:
     // `cache`: a pair cache to use (not owned, not deferred-removal), or
-    // nullptr for an owned btHashedOverlappingPairCache.
+    // nullptr for an owned btHashedOverlappingPairCache whose deterministic
+    // dispatch (m_deterministicOverlappingPairs) visits the pairs in Bullet's
+    // order without Bullet's quicksort per step: the last order is reused
+    // while the pairs stay put, else a radix sort rebuilds it.
     explicit Broadphase(mk_bp_kind kind = MK_BP_AUTO, btHashedOverlappingPairCache *cache = nullptr,
                         int initial_capacity = 1024);
     ~Broadphase() override;

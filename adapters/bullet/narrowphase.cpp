@@ -15,6 +15,45 @@ const int kMinkoTypes[] = {SPHERE_SHAPE_PROXYTYPE,   BOX_SHAPE_PROXYTYPE,       
                            CYLINDER_SHAPE_PROXYTYPE, CONE_SHAPE_PROXYTYPE,        CONVEX_HULL_SHAPE_PROXYTYPE,
                            STATIC_PLANE_PROXYTYPE};
 
+// Radius of a ball about the shape's origin holding the whole solid
+// (infinite for a plane).
+btScalar bound_radius(const mk_shape &s)
+{
+    switch (s.type) {
+    case MK_SHAPE_SPHERE: return s.radius;
+    case MK_SHAPE_BOX: return btSqrt(mk_v3_dot(s.u.half_extents, s.u.half_extents)) + s.radius;
+    case MK_SHAPE_CAPSULE: return s.u.capsule.half_height + s.radius;
+    // The base rim is farther from the origin than the apex.
+    case MK_SHAPE_CYLINDER: return btSqrt(s.u.cylinder.radius * s.u.cylinder.radius + s.u.cylinder.half_height * s.u.cylinder.half_height) + s.radius;
+    case MK_SHAPE_CONE: return btSqrt(s.u.cone.radius * s.u.cone.radius + s.u.cone.half_height * s.u.cone.half_height) + s.radius;
+    case MK_SHAPE_HULL: return btSqrt(mk_v3_dot(s.u.hull->centroid, s.u.hull->centroid)) + s.u.hull->outer_radius + s.radius;
+    default: return BT_INFINITY;
+    }
+}
+
+// A lower bound on the distance from point p (the shape's local frame) to the
+// solid: exact for a box, centre distance minus bounding radius otherwise.
+btScalar distance_lower_bound(const mk_shape &s, const btVector3 &p)
+{
+    if (s.type != MK_SHAPE_BOX) return p.length() - bound_radius(s);
+    const mk_vec3 &h = s.u.half_extents;
+    const btVector3 out(btMax(btFabs(p.x()) - h.x, btScalar(0)), btMax(btFabs(p.y()) - h.y, btScalar(0)),
+                        btMax(btFabs(p.z()) - h.z, btScalar(0)));
+    return out.length() - s.radius;
+}
+
+// Whether the solids are certainly more than `threshold` apart, B at pose
+// `rel` in A's frame: each centre against the other solid, less its own
+// bounding radius. About 60 flops against a full mk_collide; in a settling
+// pile of boxes one AABB pair in five is rejected here.
+bool apart(const mk_shape &a, const mk_shape &b, const btTransform &rel, btScalar threshold)
+{
+    if (a.type == MK_SHAPE_PLANE || b.type == MK_SHAPE_PLANE) return false;
+    if (distance_lower_bound(a, rel.getOrigin()) - bound_radius(b) > threshold) return true;
+    const btVector3 a_in_b = -(rel.getOrigin() * rel.getBasis());  // R^T (0 - t)
+    return distance_lower_bound(b, a_in_b) - bound_radius(a) > threshold;
+}
+
 // One pair's algorithm: the two mapped shapes, Minko's per-pair cache (the
 // previous separating axis) and the manifold. Lives exactly as long as the
 // broadphase pair, in Bullet's algorithm pool.
@@ -51,22 +90,32 @@ public:
 
         // Shapes are refreshed every step (a few loads), so a resized or
         // rescaled primitive or a new margin is seen at once, as by Bullet.
-        mk_manifold mf;
-        mf.count = 0;
         // The query runs in A's Bullet frame: B's pose relative to A costs one
         // matrix-to-quaternion conversion instead of two, and large world
         // coordinates cancel before they reach Minko.
         const btTransform &ta = wa->getWorldTransform();
+        const btTransform rel = ta.inverseTimes(wb->getWorldTransform());
+        const btScalar threshold = m_manifold->getContactBreakingThreshold();
+        mk_manifold mf;
+        mf.count = 0;
         mk_status st = refresh_map(wa->getCollisionShape(), &m_a);
         if (st == MK_OK) st = refresh_map(wb->getCollisionShape(), &m_b);
-        if (st == MK_OK)
-            st = mk_collide(&m_a.shape, mk_transform_make(mk_v3_zero(), m_a.axis), &m_b.shape,
-                            minko_pose(ta.inverseTimes(wb->getWorldTransform()), m_b),
-                            m_manifold->getContactBreakingThreshold(), &m_cache, &mf);
+        if (st == MK_OK && apart(m_a.shape, m_b.shape, rel, threshold)) {
+            // Farther apart than the threshold: mk_collide would report no
+            // point. What it leaves in the cache then (no preferred axis) is
+            // a cold cache, and a pair that meets again starts cold.
+            m_cache = mk_manifold_cache();
+        } else if (st == MK_OK) {
+            st = mk_collide(&m_a.shape, mk_transform_make(mk_v3_zero(), m_a.axis), &m_b.shape, minko_pose(rel, m_b),
+                            threshold, &m_cache, &mf);
+        }
         if (st != MK_OK) {
             m_config->stats.collide_errors++;
             mf.count = 0;
         }
+        // Nothing to write and nothing cached to remove or refresh: the common
+        // case of a pair whose boxes overlap while the shapes do not.
+        if (mf.count == 0 && (!m_own || m_manifold->getNumContacts() == 0)) return;
         // Minko: normal from A to B, depth > 0 penetrating, point_b on B.
         // Bullet: normal on B pointing from B to A, signed distance < 0 penetrating.
         PairContact pts[MK_MANIFOLD_MAX_POINTS];
@@ -236,10 +285,10 @@ namespace {
 // the usual resting contact of Bullet hulls. Probe: two unit-cube hulls
 // rounded by 0.04 whose cores are 0.05 apart along x and y, so their
 // nearest features are two parallel edges sqrt(0.05^2 + 0.05^2) apart and the
-// rounded solids overlap by 0.08 - that. Until mk_collide gets this right
-// (today it takes the SAT separation along a face axis as the core distance,
-// which overstates such depths by up to 0.015 on Bullet-sized hulls), hull
-// pairs stay on Bullet's own algorithms.
+// rounded solids overlap by 0.08 - that. A build whose mk_collide gets this
+// wrong (before 18c7092 it took the SAT separation along a face axis as the
+// core distance, overstating such depths by up to 0.015 on Bullet-sized
+// hulls) leaves rounded hull pairs on Bullet's own algorithms.
 bool rounded_polytopes_exact()
 {
     static const bool exact = [] {
@@ -267,15 +316,25 @@ bool rounded_polytopes_exact()
 }  // namespace
 
 // mk_collide answers every pair it supports, or MK_ERR_UNSUPPORTED for pairs
-// whose module this build lacks; ask it once, on touching unit poses.
+// whose module this build lacks. That depends on the two types alone: ask it
+// once per type pair, on touching unit poses, and remember (a probe costs as
+// much as a deep contact; pairs are created by the thousand in a pile).
 bool CollisionConfiguration::minko_handles(const ShapeMap &a, const ShapeMap &b)
 {
     const bool rounded_hull = (a.shape.type == MK_SHAPE_HULL && a.shape.radius > 0) ||
                               (b.shape.type == MK_SHAPE_HULL && b.shape.radius > 0);
     if (rounded_hull && !rounded_polytopes_exact()) return false;
+    // 0: not known yet, 1: yes, 2: no. Racing threads store the same answer.
+    static std::atomic<signed char> known[MK_SHAPE_TYPE_COUNT][MK_SHAPE_TYPE_COUNT];
+    std::atomic<signed char> &k = known[a.shape.type][b.shape.type];
+    const signed char seen = k.load(std::memory_order_relaxed);
+    if (seen) return seen == 1;
     mk_manifold m;
     const mk_transform id = mk_transform_identity();
-    return mk_collide(&a.shape, id, &b.shape, id, 0, nullptr, &m) == MK_OK;
+    const mk_status st = mk_collide(&a.shape, id, &b.shape, id, 0, nullptr, &m);
+    // Any other refusal is about these shapes, not the types: not remembered.
+    if (st == MK_OK || st == MK_ERR_UNSUPPORTED) k.store(st == MK_OK ? 1 : 2, std::memory_order_relaxed);
+    return st == MK_OK;
 }
 
 bool set_narrowphase(btCollisionWorld *world, Backend b)

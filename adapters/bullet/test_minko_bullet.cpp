@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <btBulletDynamicsCommon.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
 #include "contact_writer.h"
 #include "minko_bullet.h"
@@ -517,6 +518,69 @@ START_TEST(bp_same_trajectories_as_bullet)
 }
 END_TEST
 
+// The owned pair cache's deterministic dispatch visits every pair once, in
+// exactly the order Bullet's own btHashedOverlappingPairCache does for the
+// same pairs, also after proxies were destroyed and new ones (higher uids,
+// reused Minko slots) created, and twice in a row (the kept order); without
+// the flag it visits them all too.
+START_TEST(bp_deterministic_dispatch_order)
+{
+    struct Recorder : btOverlapCallback {
+        std::vector<std::pair<int, int>> seen;
+        bool processOverlap(btBroadphasePair &pair) override
+        {
+            seen.push_back(std::make_pair(pair.m_pProxy0->m_uniqueId, pair.m_pProxy1->m_uniqueId));
+            return false;
+        }
+    };
+    btDefaultCollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    mkb::Broadphase bp(MK_BP_AUTO, nullptr, 16);
+    mk_rng rng = {77};
+    std::vector<btBroadphaseProxy *> proxies;
+    auto add = [&]() {
+        const btVector3 c((btScalar)mk_rng_range(&rng, -4, 4), (btScalar)mk_rng_range(&rng, -4, 4),
+                          (btScalar)mk_rng_range(&rng, -4, 4));
+        const btVector3 h((btScalar)mk_rng_range(&rng, 0.2, 1.5), (btScalar)mk_rng_range(&rng, 0.2, 1.5),
+                          (btScalar)mk_rng_range(&rng, 0.2, 1.5));
+        proxies.push_back(bp.createProxy(c - h, c + h, BOX_SHAPE_PROXYTYPE, nullptr, 1, -1, &dispatcher));
+    };
+    for (int i = 0; i < 300; i++) add();
+    for (int round = 0; round < 3; round++) {
+        bp.calculateOverlappingPairs(&dispatcher);
+        btOverlappingPairCache *cache = bp.getOverlappingPairCache();
+        ck_assert_int_gt(cache->getNumOverlappingPairs(), 300);
+        btHashedOverlappingPairCache bullets;
+        for (int i = 0; i < cache->getNumOverlappingPairs(); i++)
+            bullets.addOverlappingPair(cache->getOverlappingPairArray()[i].m_pProxy0,
+                                       cache->getOverlappingPairArray()[i].m_pProxy1);
+        btDispatcherInfo info;
+        Recorder ordered, again, reference, plain;
+        info.m_deterministicOverlappingPairs = true;
+        cache->processAllOverlappingPairs(&ordered, &dispatcher, info);
+        cache->processAllOverlappingPairs(&again, &dispatcher, info);
+        bullets.processAllOverlappingPairs(&reference, &dispatcher, info);
+        info.m_deterministicOverlappingPairs = false;
+        cache->processAllOverlappingPairs(&plain, &dispatcher, info);
+        ck_assert_int_eq((int)ordered.seen.size(), cache->getNumOverlappingPairs());
+        ck_assert(ordered.seen == reference.seen);
+        ck_assert(again.seen == reference.seen);
+        std::sort(plain.seen.begin(), plain.seen.end());
+        std::sort(ordered.seen.begin(), ordered.seen.end());
+        ck_assert(plain.seen == ordered.seen);
+        // Destroy every third proxy, add as many (new uids, reused slots).
+        for (size_t i = 0; i < proxies.size(); i += 3) {
+            bp.destroyProxy(proxies[i], &dispatcher);
+            proxies[i] = proxies.back();
+            proxies.pop_back();
+        }
+        while (proxies.size() < 300) add();
+    }
+    for (btBroadphaseProxy *p : proxies) bp.destroyProxy(p, &dispatcher);
+    ck_assert_int_eq(bp.take_error(), MK_OK);
+}
+END_TEST
+
 // Bodies removed (some in contact) and added while the simulation runs: no pair
 // may outlive its proxy, and the set stays exact.
 START_TEST(bp_proxy_removal_during_simulation)
@@ -992,6 +1056,95 @@ START_TEST(np_conventions_match_bullet)
 }
 END_TEST
 
+// Signed distance of two convex shapes: the exact oracle, or Bullet's GJK
+// (which sees the same solids, margins included) for the shapes the oracle
+// does not model (cylinders, cones); good to 1e-6 on separated pairs.
+bool gap_of(const btCollisionShape *a, const btTransform &xa, const btCollisionShape *b, const btTransform &xb,
+            double *d)
+{
+    PointOut ref;
+    if (oracle_reference(a, xa, b, xb, &ref)) {
+        *d = ref.distance;
+        return true;
+    }
+    btGjkEpaSolver2::sResults r;
+    btGjkEpaSolver2::SignedDistance(static_cast<const btConvexShape *>(a), xa, static_cast<const btConvexShape *>(b), xb,
+                                    xb.getOrigin() - xa.getOrigin(), r);
+    *d = r.distance;
+    return r.status == btGjkEpaSolver2::sResults::Separated || r.status == btGjkEpaSolver2::sResults::Penetrating;
+}
+
+// A pair just inside the contact threshold is never skipped: the
+// algorithm's bounding test (centre against the other solid, less its
+// bounding radius) is exact for spheres and a sphere against a box, and
+// conservative for the rest, so at a gap of 0.9 times the manifold's contact
+// breaking threshold (placed by bisection on the exact distance, along
+// random directions) the algorithm reports as many points as mk_collide
+// itself, the deepest no farther apart than the gap.
+START_TEST(np_near_pairs_never_skipped)
+{
+    mkb::CollisionConfiguration mine;
+    btBoxShape box(btVector3(btScalar(0.5), btScalar(0.7), btScalar(0.4)));
+    btSphereShape sphere(btScalar(0.5));
+    btCapsuleShape capsule(btScalar(0.3), btScalar(0.8));
+    btCylinderShapeX cylinder(btVector3(btScalar(0.6), btScalar(0.5), btScalar(0.5)));
+    btConeShapeZ cone(btScalar(0.4), btScalar(1.0));
+    btConvexHullShape hull;
+    mk_rng cloud = {99};
+    for (int i = 0; i < 16; i++) {
+        mk_vec3 p = mk_rng_dir(&cloud);
+        hull.addPoint(btVector3((btScalar)(0.6 * p.x), (btScalar)(0.5 * p.y), (btScalar)(0.4 * p.z)), false);
+    }
+    hull.recalcLocalAabb();
+    hull.setMargin(0);  // sharp: a Minko pair in every build with SAT
+    btCollisionShape *shapes[] = {&box, &sphere, &capsule, &cylinder, &cone, &hull};
+    mk_rng rng = {2024};
+    int checked = 0, reported = 0;
+    for (btCollisionShape *a : shapes) {
+        for (btCollisionShape *b : shapes) {
+            // What btCollisionDispatcher::getNewManifold gives the pair.
+            const double gap = 0.9 * std::min(a->getContactBreakingThreshold(gContactBreakingThreshold),
+                                              b->getContactBreakingThreshold(gContactBreakingThreshold));
+            for (int k = 0; k < 4; k++) {
+                btTransform xa = random_pose(&rng, 0), xb = random_pose(&rng, 0);
+                const mk_vec3 u = mk_rng_dir(&rng);
+                const btVector3 dir((btScalar)u.x, (btScalar)u.y, (btScalar)u.z);
+                // Bisection on the centre offset s: overlapping at 0, apart at 4.
+                double lo = 0, hi = 4;
+                PointOut ref;
+                for (int it = 0; it < 60; it++) {
+                    const double mid = 0.5 * (lo + hi);
+                    xb.setOrigin(dir * (btScalar)mid);
+                    if (!gap_of(a, xa, b, xb, &ref.distance)) break;
+                    (ref.distance < gap ? lo : hi) = mid;
+                }
+                xb.setOrigin(dir * (btScalar)lo);
+                if (!gap_of(a, xa, b, xb, &ref.distance) || ref.distance < 0.5 * gap) continue;
+                bool used_minko = false;
+                std::vector<PointOut> got = collide_once(&mine, a, xa, b, xb, &used_minko);
+                if (!used_minko) continue;
+                mkb::ShapeMap ma, mb;
+                mk_manifold direct;
+                ck_assert_int_eq(mine.map_shape(a, &ma), MK_OK);
+                ck_assert_int_eq(mine.map_shape(b, &mb), MK_OK);
+                ck_assert_int_eq(mk_collide(&ma.shape, mkb::minko_pose(xa, ma), &mb.shape, mkb::minko_pose(xb, mb),
+                                            (mk_real)(gap / 0.9), nullptr, &direct),
+                                 MK_OK);
+                ck_assert_msg((int)got.size() == direct.count, "shapes %d-%d case %d: gap %g, %d points, mk_collide %d",
+                              a->getShapeType(), b->getShapeType(), k, ref.distance, (int)got.size(), direct.count);
+                if (direct.count > 0) {
+                    ck_assert(deepest(got)->distance <= ref.distance + 1e-4);
+                    reported++;
+                }
+                checked++;
+            }
+        }
+    }
+    ck_assert_int_gt(checked, 100);
+    ck_assert_int_gt(reported, 50);
+}
+END_TEST
+
 // A world on the Minko narrowphase: boxes, spheres and capsules settle on a
 // static plane; a box resting flat carries its weight on four points whose
 // features stay the same from step to step (lifetimes grow, warm starting
@@ -1290,6 +1443,7 @@ Suite *suite()
     tcase_set_timeout(b, 60);
     tcase_add_test(b, bp_pairs_exact_every_step);
     tcase_add_test(b, bp_same_trajectories_as_bullet);
+    tcase_add_test(b, bp_deterministic_dispatch_order);
     tcase_add_test(b, bp_proxy_removal_during_simulation);
     tcase_add_test(b, bp_filtering);
     tcase_add_test(b, bp_ray_and_sweep_hits_equal_native);
@@ -1300,6 +1454,7 @@ Suite *suite()
     tcase_set_timeout(n, 60);
     tcase_add_test(n, shape_hull_cache);
     tcase_add_test(n, np_conventions_match_bullet);
+    tcase_add_test(n, np_near_pairs_never_skipped);
     tcase_add_test(n, np_world_rests_on_minko_contacts);
     tcase_add_test(n, np_shape_changes_seen);
     tcase_add_test(n, np_switch_at_run_time);

@@ -23,8 +23,9 @@
  * widen the support most. Each pair of geoms keeps Minko's manifold cache
  * from call to call (either argument order), so a resting box keeps its face
  * and its four points when it tilts a little (manifold.h: a warm query may
- * report the kept face's depth, within its hysteresis); a new pair is cold
- * and exact. A pair whose two addresses were freed by dGeomDestroy and
+ * report the kept face's depth, within its hysteresis; a lone edge-on-edge
+ * point is not kept, so faces win ties as in ODE's dBoxBox); a new pair is
+ * cold and exact. A pair whose two addresses were freed by dGeomDestroy and
  * reused by new geoms of the same classes inherits that hint, which costs
  * at most the hysteresis. One record per pair seen; records idle for longer
  * than there are live pairs, in calls, are reused. Classes: sphere, box, capsule, cylinder, convex and

@@ -12,7 +12,7 @@
  * Narrowphase: sphere-sphere, sphere-box (and box-box once Minko's SAT is in
  * the build) against ODE's own colliders on the same poses; stride,
  * max-contacts, CONTACTS_UNIMPORTANT and separated pairs; the per-pair
- * manifold cache (warm keeps the face, cold is exact); fallback to
+ * manifold cache (warm keeps a face but not an edge pair, cold is exact); fallback to
  * dCollide; overrides gone after dCloseODE/dInitODE2 and back after
  * mk_ode_init; convex records and their staleness guard; time of impact.
  */
@@ -696,10 +696,76 @@ START_TEST(test_pair_cache)
 #ifndef MK_SINGLE /* in float the edge wins by 3e-12, far below rounding: either answer is right */
     ck_assert_int_eq(n, 1);
 #endif
+    /* Edge on edge is not kept: from that one point, the pair moves to a
+     * pose whose minimum is a face with the edge pair within the hysteresis
+     * band; keeping the edge would give one point, the face gives four, as a
+     * new pair does (the pose was found by a search for exactly that). */
+    dRFromAxisAndAngle(R, 0.321881, 0.579229, -0.087924, 0.00081822);
+    dGeomSetRotation(top2, R);
+    dGeomSetPosition(top2, 5 - 0.251997, 5 + 0.039561, 0.999062);
+    n = mk_ode_collide(top2, base2, MAXC, warm, sizeof(dContactGeom));
+    {
+        dGeomID fresh_top = dCreateBox(0, 1, 1, 1), fresh_base = dCreateBox(0, 1, 1, 1);
+        dGeomSetRotation(fresh_top, R);
+        dGeomSetPosition(fresh_top, 5 - 0.251997, 5 + 0.039561, 0.999062);
+        dGeomSetPosition(fresh_base, 5, 5, 0);
+        ck_assert_int_eq(n, mk_ode_collide(fresh_top, fresh_base, MAXC, cold, sizeof(dContactGeom)));
+        dGeomDestroy(fresh_top);
+        dGeomDestroy(fresh_base);
+    }
+#ifndef MK_SINGLE
+    ck_assert_int_eq(n, 4);
+#endif
     dGeomDestroy(top);
     dGeomDestroy(base);
     dGeomDestroy(top2);
     dGeomDestroy(base2);
+    mk_ode_close();
+}
+END_TEST
+
+/* The per-pair records under churn: pairs appear, go idle and are replaced
+ * by new geoms (some at reused addresses), so the record table grows,
+ * recycles idle records and reuses them; every resting pair keeps its four
+ * points and Minko answers every call. */
+START_TEST(test_pair_cache_churn)
+{
+    enum { N = 300, FRAMES = 12 };
+    dGeomID top[N], base[N];
+    dContactGeom c[MAXC];
+    long long before;
+    int i, frame;
+    dInitODE2(0);
+    for (i = 0; i < N; i++) {
+        base[i] = dCreateBox(0, 1, 1, 1);
+        dGeomSetPosition(base[i], 3 * i, 0, 0);
+        top[i] = NULL;
+    }
+    if (!mk_ode_supports(base[0], base[1])) {
+        fprintf(stderr, "test_pair_cache_churn: box-box is not in this Minko build; skipped\n");
+        for (i = 0; i < N; i++) dGeomDestroy(base[i]);
+        mk_ode_close();
+        return;
+    }
+    before = minko_calls();
+    for (frame = 0; frame < FRAMES; frame++) {
+        /* a third of the stacks is live each frame; every third frame they are rebuilt with new tops */
+        int from = (frame / 3 % 3) * (N / 3);
+        for (i = from; i < from + N / 3; i++) {
+            if (frame % 3 == 0) {
+                if (top[i]) dGeomDestroy(top[i]);
+                top[i] = dCreateBox(0, 0.8, 0.8, 0.8);
+                dGeomSetPosition(top[i], 3 * i + 0.05, 0.02, 0.899);
+            }
+            ck_assert_int_eq(mk_ode_collide(i % 2 ? top[i] : base[i], i % 2 ? base[i] : top[i], MAXC, c, sizeof(dContactGeom)), 4);
+            MK_ASSERT_NEAR(c[0].depth, 0.001, 100 * TOL);
+        }
+    }
+    ck_assert_int_eq((int)(minko_calls() - before), FRAMES * (N / 3));
+    for (i = 0; i < N; i++) {
+        if (top[i]) dGeomDestroy(top[i]);
+        dGeomDestroy(base[i]);
+    }
     mk_ode_close();
 }
 END_TEST
@@ -960,6 +1026,7 @@ int main(void)
     tcase_add_test(np, test_sphere_box_matches_ode);
     tcase_add_test(np, test_box_box_matches_ode);
     tcase_add_test(np, test_pair_cache);
+    tcase_add_test(np, test_pair_cache_churn);
     tcase_add_test(np, test_stride_and_max_contacts);
     tcase_add_test(np, test_fallback_to_dcollide);
     tcase_add_test(np, test_override_reinstalled_after_reinit);

@@ -23,7 +23,8 @@
  * ray, stats) never allocate and never change the broadphase, so several
  * threads may query at once; no other call is thread-safe.
  *
- * Complexity, n proxies, d of them moving, p pairs, k changes per update:
+ * Complexity, n proxies, d of them moving, s static, p pairs, k changes per
+ * update; and where each structure loses:
  *   brute force  update O(d n); queries O(n). Loses beyond a few hundred proxies.
  *   SAP          update O(n + swaps + k) for coherent motion: each endpoint
  *                moves past the endpoints between its old and new place. Loses
@@ -31,24 +32,39 @@
  *                every box crossing thousands of others per frame) or motion
  *                is incoherent; it then falls back to a full sort and a sweep
  *                on the axis of largest spread, O(n log n + overlaps in 1-D).
- *                Region query O(log n + proxies in the x slab).
- *   hash grid    update O(d + candidates with a moved member + cell changes):
- *                candidates are pairs sharing a cell, kept across frames; a
- *                candidate's AABBs are re-read only once its two proxies have
- *                travelled as far as its gap (or overlap) was thick, and cells
- *                are revisited only when a proxy crosses a cell wall. Memory
- *                O(n) cells, not world volume (about 0.8-2 kB per proxy with
+ *                Statics sit in its axes like everyone else. Region query
+ *                O(log n + proxies in the x slab).
+ *   hash grid    update O(d + candidates with a moved member + cell changes
+ *                + static look-ups): candidates are pairs of non-static
+ *                proxies sharing a cell, kept across frames; a candidate's
+ *                AABBs are re-read only once its two proxies have travelled as
+ *                far as its gap (or overlap) was thick, and cells are
+ *                revisited only when a proxy crosses a cell wall. Statics that
+ *                stay put sit in a static index built in O(s log s) (a dense
+ *                array of cells per size level when that fits in ~8 cells per
+ *                static, hashed cells otherwise) and cost nothing per update:
+ *                a moving proxy looks up the statics around it, O(cells + the
+ *                statics near it), only once its travel may have closed the
+ *                smallest gap it saw (every update for a fast mover). Memory
+ *                O(n) cells, not world volume (about 0.7-2 kB per proxy with
  *                its pair table). Loses when sizes spread over many octaves
  *                (a proxy is also filed in every coarser level in use, and
  *                candidates outnumber pairs up to ~10x), when one cell holds
- *                many proxies (candidates grow with its square), and on fast
- *                motion (every crossing re-files cells). Proxies with an
- *                infinite side are candidates of every proxy. Region query
- *                O(cells in the box's range), or O(n) when that is more.
+ *                many proxies (candidates grow with its square), on fast
+ *                motion (every crossing re-files cells, a fast mover looks up
+ *                statics every update; a level where most proxies are fast is
+ *                filed one level coarser to halve the crossings), on teleports (each one re-files
+ *                all its cells and rebuilds its candidates), and on statics
+ *                that keep moving (a moved static leaves the index for the
+ *                cells; the index is rebuilt, O(n), once a quarter of it
+ *                has). Proxies with an infinite side are candidates of every
+ *                proxy. Region query O(cells in the box's range), or O(n)
+ *                when that is more.
  *
  * Memory per proxy is fixed at creation for SAP (about 0.5 kB); the pair
- * table and the grid's cells grow on demand. With fixed_capacity the grid
- * needs pair_capacity for its candidates, not just the pairs.
+ * table, the grid's cells and its static index grow on demand. With
+ * fixed_capacity the grid needs pair_capacity for its candidates, not just
+ * the pairs, and has no static index (statics are filed in cells).
  */
 #ifndef MINKO_BROADPHASE_H
 #define MINKO_BROADPHASE_H

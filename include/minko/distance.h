@@ -8,8 +8,9 @@
  * inputs themselves carry. A dispatch table picks the cheapest exact method for
  * the pair: closed forms for sphere/capsule/box/plane pairs (a sphere-only
  * scene never enters GJK); for two boxes, SAT's 15 axes, whose bound is
- * certified exact by the supporting features (all overlapping pairs, most
- * separated ones); GJK on the cores for other separated shapes, and EPA for
+ * certified exact by the supporting features or, for corner contacts, by a
+ * corner and its nearest point (all overlapping pairs, all but rounding-level
+ * ties of separated ones); GJK on the cores for other separated shapes, and EPA for
  * other penetrating cores. The distance GJK or EPA reports is always re-evaluated
  * with the support functions along the final normal, which for polytopes is
  * the cross product of original feature edges: polytope answers are exact to
