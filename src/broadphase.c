@@ -1,16 +1,16 @@
 /* broadphase.c: the common API in front of brute force, SAP and the grid:
  * proxies and their ids, input checks, the update driver, AUTO's choice,
  * queries and ray casts. See minko/broadphase.h for the contract. */
-#include <stdlib.h>
 #include <string.h>
 
+#include "alloc.h"
 #include "broadphase_internal.h"
 
 /* ---- memory ---- */
 
 void *mk_bp_alloc_(mk_bp *bp, size_t size)
 {
-    void *p = bp->alloc.alloc ? bp->alloc.alloc(bp->alloc.ctx, size, 16) : malloc(size);
+    void *p = bp->alloc.alloc(bp->alloc.ctx, size, 16);
     if (p) bp->bytes += size;
     return p;
 }
@@ -19,8 +19,7 @@ void mk_bp_free_(mk_bp *bp, void *p, size_t size)
 {
     if (!p) return;
     bp->bytes -= size;
-    if (bp->alloc.free) bp->alloc.free(bp->alloc.ctx, p, size);
-    else free(p);
+    bp->alloc.free(bp->alloc.ctx, p, size);
 }
 
 mk_status mk_bp_grow_(mk_bp *bp, void **p, size_t elem, size_t old_n, size_t new_n)
@@ -107,8 +106,7 @@ void mk_bp_destroy(mk_bp *bp)
     n = proxy_arrays(bp, a);
     for (i = 0; i < n; ++i) mk_bp_free_(bp, *a[i].p, a[i].elem * (size_t)bp->cap);
     al = bp->alloc;
-    if (al.free) al.free(al.ctx, bp, sizeof *bp);
-    else free(bp);
+    al.free(al.ctx, bp, sizeof *bp);
 }
 
 static mk_status check_def(const mk_bp_def *d)
@@ -123,18 +121,19 @@ static mk_status check_def(const mk_bp_def *d)
 mk_status mk_bp_create(const mk_bp_def *def, const mk_allocator *alloc, mk_bp **out)
 {
     mk_bp_def d = def ? *def : mk_bp_default_def();
+    mk_allocator al;
     mk_bp *bp;
     proxy_array_ a[9];
     int n, i, pair_cap;
     mk_status st;
     if (!out) return MK_ERR_NULL;
     *out = NULL;
-    if (alloc && (!alloc->alloc || !alloc->free)) return MK_ERR_NULL;
+    if (mk_alloc_resolve_(alloc, &al) != MK_OK) return MK_ERR_NULL;
     if ((st = check_def(&d)) != MK_OK) return st;
-    bp = alloc ? (mk_bp *)alloc->alloc(alloc->ctx, sizeof *bp, 16) : (mk_bp *)malloc(sizeof *bp);
+    bp = (mk_bp *)al.alloc(al.ctx, sizeof *bp, 16);
     if (!bp) return MK_ERR_OUT_OF_MEMORY;
     memset(bp, 0, sizeof *bp);
-    if (alloc) bp->alloc = *alloc;
+    bp->alloc = al;
     bp->def = d;
     bp->cap = d.proxy_capacity;
     bp->kind = d.kind == MK_BP_AUTO ? MK_BP_SAP : d.kind;

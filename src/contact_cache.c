@@ -8,9 +8,9 @@
  * and a table is never written while it is the one being read, so "stamp ==
  * the frame this table belongs to" is an exact occupancy test and a new
  * frame starts by bumping a counter. Stamps are 64-bit so they never wrap. */
-#include <stdlib.h>
 #include <string.h>
 
+#include "alloc.h"
 #include "minko/contact_cache.h"
 
 typedef struct mk_cache_slot {
@@ -58,20 +58,6 @@ uint32_t mk_contact_id_hash(mk_contact_id id)
     return (uint32_t)k;
 }
 
-static void *default_alloc(void *ctx, size_t size, size_t align)
-{
-    (void)ctx;
-    (void)align; /* malloc's alignment covers every type in the block */
-    return malloc(size);
-}
-
-static void default_free(void *ctx, void *ptr, size_t size)
-{
-    (void)ctx;
-    (void)size;
-    free(ptr);
-}
-
 static size_t round_up(size_t n, size_t a) { return (n + a - 1) / a * a; }
 
 mk_status mk_contact_cache_create(int capacity, const mk_allocator *alloc, mk_contact_cache **out)
@@ -82,19 +68,12 @@ mk_status mk_contact_cache_create(int capacity, const mk_allocator *alloc, mk_co
     char *mem;
     if (!out) return MK_ERR_NULL;
     if (capacity < 1 || capacity > MK_CONTACT_CACHE_MAX_CAPACITY) return MK_ERR_BAD_SIZE;
-    if (alloc && (!alloc->alloc || !alloc->free)) return MK_ERR_NULL;
+    if (mk_alloc_resolve_(alloc, &al) != MK_OK) return MK_ERR_NULL;
     while (slots < 2 * (size_t)capacity) slots *= 2; /* load factor <= 1/2 */
     head = round_up(sizeof(mk_contact_cache), 16);
     table_bytes = round_up(slots * sizeof(mk_cache_slot), 16);
     order_bytes = round_up((size_t)capacity * sizeof(int32_t), 16);
     bytes = head + 2 * table_bytes + 2 * order_bytes;
-    if (alloc) {
-        al = *alloc;
-    } else {
-        al.alloc = default_alloc;
-        al.free = default_free;
-        al.ctx = NULL;
-    }
     mem = (char *)al.alloc(al.ctx, bytes, 16);
     if (!mem) return MK_ERR_OUT_OF_MEMORY;
     memset(mem, 0, bytes); /* stamp 0 is never a live frame */

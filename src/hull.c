@@ -33,6 +33,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "alloc.h"
 #include "shape_internal.h"
 
 #define QH_TOL_ULPS 16 /* see the header comment */
@@ -112,30 +113,6 @@ typedef struct qh {
 } qh;
 
 /* ---- allocation -------------------------------------------------------------- */
-
-static void *mk_default_alloc(void *ctx, size_t size, size_t align)
-{
-    (void)ctx;
-    (void)align; /* malloc's alignment covers everything asked for here */
-    return malloc(size);
-}
-
-static void mk_default_free(void *ctx, void *ptr, size_t size)
-{
-    (void)ctx;
-    (void)size;
-    free(ptr);
-}
-
-static mk_allocator resolve_allocator(const mk_allocator *a)
-{
-    mk_allocator d;
-    if (a) return *a;
-    d.alloc = mk_default_alloc;
-    d.free = mk_default_free;
-    d.ctx = NULL;
-    return d;
-}
 
 static size_t align_up(size_t x, size_t a) { return (x + a - 1) / a * a; }
 
@@ -1132,7 +1109,7 @@ static mk_status check_points(const mk_vec3 *points, int count)
 
 mk_status mk_hull_create(const mk_vec3 *points, int count, const mk_allocator *alloc, mk_hull **out)
 {
-    mk_allocator al = resolve_allocator(alloc);
+    mk_allocator al;
     qh q;
     dv3 lo, hi, centre;
     double size;
@@ -1142,7 +1119,7 @@ mk_status mk_hull_create(const mk_vec3 *points, int count, const mk_allocator *a
     int i;
     if (!out) return MK_ERR_NULL;
     *out = NULL;
-    if (!points || (alloc && (!alloc->alloc || !alloc->free))) return MK_ERR_NULL;
+    if (!points || mk_alloc_resolve_(alloc, &al) != MK_OK) return MK_ERR_NULL;
     if (count < 4) return MK_ERR_DEGENERATE;
     if (count > MK_HULL_MAX_POINTS) return MK_ERR_CAPACITY;
     if ((st = check_points(points, count)) != MK_OK) return st;
