@@ -462,14 +462,7 @@ mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_
         spheres(a, xa, b, xb, out);
         return MK_OK;
     }
-    if (rt.swap) { /* run as (B, A), flip on the way out */
-        const mk_shape *s = a;
-        mk_transform x = xa;
-        a = b;
-        b = s;
-        xa = xb;
-        xb = x;
-    }
+    if (rt.swap) mk_swap_pair_(&a, &xa, &b, &xb); /* run as (B, A), flip on the way out */
     st = run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
     if (st != MK_OK) return st;
     to_world(&ans, ra, xa.p, rt.swap, out);

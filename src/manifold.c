@@ -490,14 +490,7 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
         if (!fn) return MK_ERR_UNSUPPORTED;
         swap = 1;
     }
-    if (swap) {
-        const mk_shape *ts = a;
-        mk_transform tx = xa;
-        a = b;
-        b = ts;
-        xa = xb;
-        xb = tx;
-    }
+    if (swap) mk_swap_pair_(&a, &xa, &b, &xb);
     /* A's rotation once, exact for any accepted quaternion (gjk.h): it builds
      * the pair and takes the manifold back to world space. */
     ra = mk_rotation_of(xa.q);

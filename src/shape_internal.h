@@ -32,6 +32,18 @@ mk_vec3 mk_core_support(const mk_shape *s, mk_vec3 dir, int *feature);
 
 static inline mk_real mk_sgn_extent_(mk_real d, mk_real h) { return d >= 0 ? h : -h; }
 
+/* Exchanges the two shapes of a pair query and their poses: dispatch tables
+ * keep one method per unordered pair and run the other order swapped. */
+static inline void mk_swap_pair_(const mk_shape **a, mk_transform *xa, const mk_shape **b, mk_transform *xb)
+{
+    const mk_shape *s = *a;
+    mk_transform x = *xa;
+    *a = *b;
+    *b = s;
+    *xa = *xb;
+    *xb = x;
+}
+
 /* The body of mk_core_support for a shape of type t (normally s->type), so
  * loops specialised on a constant t lose the switch and keep their vectors in
  * registers. *feature must be valid (in/out). */

@@ -543,11 +543,16 @@ static int trivially_none(dGeomID o1, dGeomID o2, int flags, dContactGeom *conta
     return b1 && b1 == b2;
 }
 
+/* Minko's contacts for the pair, or -1 when Minko does not handle it. */
+static int try_minko(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip)
+{
+    if (trivially_none(o1, o2, flags, contact, skip)) return 0;
+    return mk_ode_supports(o1, o2) ? minko_collide(o1, o2, flags, contact, skip) : -1;
+}
+
 int mk_ode_collide(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip)
 {
-    int n;
-    if (trivially_none(o1, o2, flags, contact, skip)) return 0;
-    n = mk_ode_supports(o1, o2) ? minko_collide(o1, o2, flags, contact, skip) : -1;
+    int n = try_minko(o1, o2, flags, contact, skip);
     if (n >= 0) return n;
     mk_ode_stats_.fallbacks++;
     return dCollide(o1, o2, flags, contact, skip);
@@ -555,9 +560,7 @@ int mk_ode_collide(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int
 
 int mk_ode_collider(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip)
 {
-    int n;
-    if (trivially_none(o1, o2, flags, contact, skip)) return 0;
-    n = mk_ode_supports(o1, o2) ? minko_collide(o1, o2, flags, contact, skip) : -1;
+    int n = try_minko(o1, o2, flags, contact, skip);
     if (n >= 0) return n;
     mk_ode_stats_.unsupported++;
     return 0;
