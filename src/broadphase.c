@@ -102,6 +102,7 @@ void mk_bp_destroy(mk_bp *bp)
     mk_allocator al;
     if (!bp) return;
     destroy_structures(bp);
+    mk_sweep_destroy_(bp);
     mk_pairs_fini_(bp);
     n = proxy_arrays(bp, a);
     for (i = 0; i < n; ++i) mk_bp_free_(bp, *a[i].p, a[i].elem * (size_t)bp->cap);
@@ -366,10 +367,13 @@ static void retire_dirty(mk_bp *bp)
 mk_status mk_bp_update(mk_bp *bp)
 {
     mk_status st;
+    int rebuild, sweeps;
     if (!bp) return MK_ERR_NULL;
     auto_choose(bp);
-    if (bp->rebuild) bp->full_rebuilds++;
+    rebuild = bp->rebuild;
+    sweeps = bp->sweeps;
     st = run_structure(bp);
+    if (rebuild && sweeps == bp->sweeps) bp->full_rebuilds++;
     if (st != MK_OK) {
         /* Whatever was missed is recounted next time; the pairs of destroyed
          * proxies go now, since their slots are about to be reused. */
@@ -387,15 +391,16 @@ const mk_bp_pair *mk_bp_pairs(const mk_bp *bp, int *count)
     return bp ? bp->pairs.set : NULL;
 }
 
+/* pairs_only: no events, even after updates that made them internally. */
 const mk_bp_pair *mk_bp_added(const mk_bp *bp, int *count)
 {
-    if (count) *count = bp ? bp->pairs.added_count : 0;
+    if (count) *count = bp && !bp->def.pairs_only ? bp->pairs.added_count : 0;
     return bp ? bp->pairs.added : NULL;
 }
 
 const mk_bp_pair *mk_bp_removed(const mk_bp *bp, int *count)
 {
-    if (count) *count = bp ? bp->pairs.removed_count : 0;
+    if (count) *count = bp && !bp->def.pairs_only ? bp->pairs.removed_count : 0;
     return bp ? bp->pairs.removed : NULL;
 }
 
@@ -504,9 +509,10 @@ mk_status mk_bp_get_stats(const mk_bp *bp, mk_bp_stats *out)
     out->static_proxies = bp->statics;
     out->pairs = bp->pairs.set_count;
     out->candidates = bp->pairs.count;
-    out->added = bp->pairs.added_count;
-    out->removed = bp->pairs.removed_count;
+    mk_bp_added(bp, &out->added);
+    mk_bp_removed(bp, &out->removed);
     out->full_rebuilds = bp->full_rebuilds;
+    out->sweeps = bp->sweeps;
     out->switches = bp->switches;
     out->bytes = bp->bytes + sizeof *bp;
 #if !defined(MK_WITHOUT_SAP)

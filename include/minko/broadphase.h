@@ -119,6 +119,7 @@ typedef struct mk_bp_def {
     mk_bp_filter_mode filter_mode;/* default MK_BP_FILTER_NONE */
     mk_bp_pair_filter filter;     /* optional */
     void *filter_ctx;
+    int pairs_only;               /* nonzero: the caller reads mk_bp_pairs() only (no events) */
 } mk_bp_def;
 
 typedef struct mk_bp_pair { mk_bp_id a, b; } mk_bp_pair; /* a < b */
@@ -135,6 +136,7 @@ typedef struct mk_bp_stats {
     int cells;              /* grid: occupied cells */
     int candidates;         /* grid: candidate pairs held (pairs sharing a cell); others: pairs held */
     size_t bytes;           /* memory held, all blocks */
+    int sweeps;             /* SAP with pairs_only: updates answered by a stateless sweep so far */
 } mk_bp_stats;
 
 typedef struct mk_bp mk_bp;
