@@ -350,14 +350,16 @@ static void finish_forgotten(mk_bp *bp)
     for (i = 0; i < nd; ++i) erase(t, t->scratch2[i]);
 }
 
-void mk_sort_u64_(uint64_t *keys, uint64_t *tmp, int n)
+void mk_sort_u64_(uint64_t *keys, uint64_t *tmp, int n) { mk_sort_u64_by_(keys, tmp, n, 0); }
+
+void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte)
 {
     /* LSD radix sort on bytes, skipping bytes that are equal in every key
-     * (slot numbers use few bits, so most passes are skipped). */
+     * (slot numbers use few bits, so most passes are skipped). Stable. */
     uint64_t all_or = 0, all_and = ~(uint64_t)0, *src = keys, *dst = tmp, *sw;
     int shift, i;
     for (i = 0; i < n; ++i) { all_or |= keys[i]; all_and &= keys[i]; }
-    for (shift = 0; shift < 64; shift += 8) {
+    for (shift = 8 * from_byte; shift < 64; shift += 8) {
         size_t count[256], sum = 0;
         int d;
         if ((((all_or ^ all_and) >> shift) & 0xff) == 0) continue;

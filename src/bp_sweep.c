@@ -101,42 +101,50 @@ static uint32_t row_of(const frame_ *f, double y)
     return t >= (double)MK_SWEEP_ROWS_ ? MK_SWEEP_ROWS_ : (uint32_t)t;
 }
 
-/* Axes from the spread of the finite centres; ranges and the row height
- * from the boxes finite on the row axis. */
-static void plan(const mk_bp *bp, frame_ *f)
+/* One pass over the boxes: axes from the spread of the finite centres;
+ * ranges and the row height from the boxes finite on the row axis, kept for
+ * every axis since the row axis is known only at the end. */
+typedef struct spread_ {
+    double sum[3], sum2[3];
+    int cnt[3];
+    double lo[3], hi[3];  /* range of the finite ends of boxes with a finite extent */
+    double ext[3];        /* largest finite extent */
+} spread_;
+
+static void measure(const mk_bp *bp, spread_ *p)
 {
-    double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0}, var[3];
-    double xlo = HUGE_VAL, xhi = -HUGE_VAL, ylo = HUGE_VAL, yhi = -HUGE_VAL, hmax = 0;
-    int cnt[3] = {0, 0, 0}, k;
     uint32_t s;
+    int k;
+    memset(p, 0, sizeof *p);
+    for (k = 0; k < 3; ++k) { p->lo[k] = HUGE_VAL; p->hi[k] = -HUGE_VAL; }
     for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
-        mk_vec3 c;
+        const mk_aabb *b = &bp->box[s];
         if (!in_structure(bp, s)) continue;
-        c = mk_aabb_center(bp->box[s]);
         for (k = 0; k < 3; ++k) {
-            double v = (double)(&c.x)[k];
-            if (!mk_real_is_valid((mk_real)v)) continue; /* infinite boxes say nothing about spread */
-            sum[k] += v; sum2[k] += v * v; cnt[k]++;
+            double l = lo_of(b, k), h = hi_of(b, k), c = 0.5 * (l + h);
+            if (!(h - l <= MK_REAL_MAX)) continue; /* infinite: says nothing about spread */
+            p->sum[k] += c; p->sum2[k] += c * c; p->cnt[k]++;
+            if (l < p->lo[k]) p->lo[k] = l;
+            if (h > p->hi[k]) p->hi[k] = h;
+            if (h - l > p->ext[k]) p->ext[k] = h - l;
         }
     }
-    for (k = 0; k < 3; ++k) var[k] = cnt[k] ? sum2[k] / cnt[k] - (sum[k] / cnt[k]) * (sum[k] / cnt[k]) : 0;
+}
+
+static void plan(const mk_bp *bp, frame_ *f)
+{
+    spread_ p;
+    double var[3], xlo, xhi, ylo, yhi, hmax;
+    int k;
+    measure(bp, &p);
+    for (k = 0; k < 3; ++k) var[k] = p.cnt[k] ? p.sum2[k] / p.cnt[k] - (p.sum[k] / p.cnt[k]) * (p.sum[k] / p.cnt[k]) : 0;
     f->ax = 0;
     for (k = 1; k < 3; ++k) if (var[k] > var[f->ax]) f->ax = k;
     f->ay = f->ax == 0 ? 1 : 0;
     for (k = 0; k < 3; ++k) if (k != f->ax && var[k] > var[f->ay]) f->ay = k;
-    for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
-        const mk_aabb *b = &bp->box[s];
-        double l, h;
-        if (!in_structure(bp, s)) continue;
-        l = lo_of(b, f->ay); h = hi_of(b, f->ay);
-        if (!(h - l <= MK_REAL_MAX)) continue; /* infinite on the row axis: a big box */
-        if (l < ylo) ylo = l;
-        if (h > yhi) yhi = h;
-        if (h - l > hmax) hmax = h - l;
-        l = lo_of(b, f->ax); h = hi_of(b, f->ax);
-        if (l >= -MK_REAL_MAX && l < xlo) xlo = l;
-        if (h <= MK_REAL_MAX && h > xhi) xhi = h;
-    }
+    xlo = p.lo[f->ax]; xhi = p.hi[f->ax];
+    ylo = p.lo[f->ay]; yhi = p.hi[f->ay];
+    hmax = p.ext[f->ay];
     /* Any monotone map is correct; these only spread the keys well. */
     f->x0 = xlo <= xhi ? xlo : 0;
     f->xscale = xhi > xlo ? (double)(MK_SWEEP_Q_MAX_ - 1) / (xhi - xlo) : 0;
@@ -245,7 +253,7 @@ static int sort_keys(mk_bp *bp, const frame_ *f, int *nbig)
         if (!(hi_of(b, f->ay) - lo_of(b, f->ay) <= MK_REAL_MAX)) { w->big[(*nbig)++] = s; continue; }
         w->key[n++] = (uint64_t)row_of(f, lo_of(b, f->ay)) << 48 | (uint64_t)quantise(f, lo_of(b, f->ax)) << 24 | s;
     }
-    mk_sort_u64_(w->key, w->tmp, n);
+    mk_sort_u64_by_(w->key, w->tmp, n, 3); /* the slot is payload: slot order breaks ties */
     for (i = 0; i < n; ++i) {
         const mk_aabb *b = &bp->box[slot_at(w, i)];
         w->box[i] = *b;

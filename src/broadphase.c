@@ -165,6 +165,12 @@ static inline mk_status check_box(const mk_aabb *b)
     return ok ? MK_OK : MK_ERR_BAD_AABB;
 }
 
+static inline int same_box(const mk_aabb *a, const mk_aabb *b)
+{
+    return (a->lo.x == b->lo.x) & (a->lo.y == b->lo.y) & (a->lo.z == b->lo.z) & (a->hi.x == b->hi.x) &
+           (a->hi.y == b->hi.y) & (a->hi.z == b->hi.z);
+}
+
 /* The slot of a live, not destroyed id, or -1. */
 static inline int slot_of(const mk_bp *bp, mk_bp_id id)
 {
@@ -228,6 +234,7 @@ mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box)
     if (!bp) return MK_ERR_NULL;
     if ((s = slot_of(bp, id)) < 0) return MK_ERR_UNKNOWN_ID;
     if ((st = check_box(&box)) != MK_OK) return st;
+    if (same_box(&bp->next[s], &box)) return MK_OK; /* a resting body is not a mover */
     bp->next[s] = box;
     if (bp->flags[s] & MK_PF_NEW) bp->box[s] = box;
     else mark_dirty(bp, (uint32_t)s, MK_PF_MOVED);

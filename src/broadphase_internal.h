@@ -137,6 +137,8 @@ void mk_pairs_touch_(mk_bp *bp, mk_pair_entry *e);
 mk_status mk_pairs_finish_(mk_bp *bp);
 /* Sort n keys ascending (LSD radix); tmp has room for n. */
 void mk_sort_u64_(uint64_t *keys, uint64_t *tmp, int n);
+/* The same on the bytes from from_byte up only; ties keep their order. */
+void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte);
 
 /* ---- stateless sort and sweep (bp_sweep.c) ---- */
 /* Reports every overlapping pair of live proxies (no static-static pair)

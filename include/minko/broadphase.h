@@ -155,7 +155,8 @@ MK_API mk_status mk_bp_create_proxy(mk_bp *bp, mk_aabb box, void *user, uint64_t
                                     int is_static, mk_bp_id *out);
 /* Its pairs disappear at the next update (reported in mk_bp_removed()). */
 MK_API mk_status mk_bp_destroy_proxy(mk_bp *bp, mk_bp_id id);
-/* New AABB; O(1), the structure catches up in mk_bp_update(). */
+/* New AABB; O(1), the structure catches up in mk_bp_update(). The same AABB
+ * as the last one given is not a move (resting bodies cost nothing). */
 MK_API mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box);
 /* New filter words: the proxy's pairs are re-filtered at the next update. */
 MK_API mk_status mk_bp_set_filter(mk_bp *bp, mk_bp_id id, uint64_t cat, uint64_t mask);
