@@ -71,6 +71,7 @@ void mk_sweep_destroy_(mk_bp *bp)
     bp->sweep = NULL;
 }
 
+
 static int in_structure(const mk_bp *bp, uint32_t s)
 {
     return (bp->flags[s] & (MK_PF_ALIVE | MK_PF_DYING)) == MK_PF_ALIVE;
@@ -101,23 +102,24 @@ static uint32_t row_of(const frame_ *f, double y)
     return t >= (double)MK_SWEEP_ROWS_ ? MK_SWEEP_ROWS_ : (uint32_t)t;
 }
 
-/* One pass over the boxes: axes from the spread of the finite centres;
- * ranges and the row height from the boxes finite on the row axis, kept for
- * every axis since the row axis is known only at the end. */
+/* Axes and ranges only steer the speed (any monotone quantisation and any
+ * row origin are correct), so they come from a sample of at most about 1024
+ * boxes; the row height must bound every box and takes a full pass. */
+#define MK_SWEEP_SAMPLE_ 1024
+
 typedef struct spread_ {
     double sum[3], sum2[3];
     int cnt[3];
-    double lo[3], hi[3];  /* range of the finite ends of boxes with a finite extent */
-    double ext[3];        /* largest finite extent */
+    double lo[3], hi[3];  /* range of the sampled boxes finite on that axis */
 } spread_;
 
 static void measure(const mk_bp *bp, spread_ *p)
 {
-    uint32_t s;
+    uint32_t s, stride = (uint32_t)(bp->hi_slot / MK_SWEEP_SAMPLE_ + 1);
     int k;
     memset(p, 0, sizeof *p);
     for (k = 0; k < 3; ++k) { p->lo[k] = HUGE_VAL; p->hi[k] = -HUGE_VAL; }
-    for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
+    for (s = 0; s < (uint32_t)bp->hi_slot; s += stride) {
         const mk_aabb *b = &bp->box[s];
         if (!in_structure(bp, s)) continue;
         for (k = 0; k < 3; ++k) {
@@ -126,9 +128,20 @@ static void measure(const mk_bp *bp, spread_ *p)
             p->sum[k] += c; p->sum2[k] += c * c; p->cnt[k]++;
             if (l < p->lo[k]) p->lo[k] = l;
             if (h > p->hi[k]) p->hi[k] = h;
-            if (h - l > p->ext[k]) p->ext[k] = h - l;
         }
     }
+}
+
+/* The largest finite extent on `axis`, over every box. */
+static double largest_extent(const mk_bp *bp, int axis)
+{
+    double m = 0;
+    uint32_t s;
+    for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
+        double e = hi_of(&bp->box[s], axis) - lo_of(&bp->box[s], axis);
+        if (in_structure(bp, s) && e > m && e <= MK_REAL_MAX) m = e;
+    }
+    return m;
 }
 
 static void plan(const mk_bp *bp, frame_ *f)
@@ -144,8 +157,7 @@ static void plan(const mk_bp *bp, frame_ *f)
     for (k = 0; k < 3; ++k) if (k != f->ax && var[k] > var[f->ay]) f->ay = k;
     xlo = p.lo[f->ax]; xhi = p.hi[f->ax];
     ylo = p.lo[f->ay]; yhi = p.hi[f->ay];
-    hmax = p.ext[f->ay];
-    /* Any monotone map is correct; these only spread the keys well. */
+    hmax = largest_extent(bp, f->ay);
     f->x0 = xlo <= xhi ? xlo : 0;
     f->xscale = xhi > xlo ? (double)(MK_SWEEP_Q_MAX_ - 1) / (xhi - xlo) : 0;
     if (!(f->xscale <= 1e300)) f->xscale = 0;
