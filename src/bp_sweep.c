@@ -11,7 +11,7 @@
  * the next one. Row height H is the largest box extent on the row axis (a
  * little more, so rounding cannot hide a pair), so a box's partners start in
  * its own row or the next one up or down. Each box becomes one 64-bit key
- * (row, its lower end on the sweep axis quantised to 24 bits, slot) and one
+ * (row, its lower end on the sweep axis quantised to 16 bits, slot) and one
  * radix sort orders them; each row is swept alone and then merged with the
  * row above. The quantisation is monotone, so comparing quantised values
  * never stops a sweep before a box it should have met; the exact closed
@@ -25,11 +25,13 @@
 
 #include "broadphase_internal.h"
 
-#define MK_SWEEP_Q_MAX_ 0xFFFFFFu  /* 24-bit quantised positions */
+/* 16-bit quantised positions: with the row in the next byte, the radix sort
+ * takes three passes over the keys (the slot is payload, never sorted on). */
+#define MK_SWEEP_Q_MAX_ 0xFFFFu
 #define MK_SWEEP_ROWS_ 0xFFFFu     /* 16-bit row numbers */
 
 struct mk_sweep {
-    uint64_t *key, *tmp;  /* sort keys: row << 48 | q(lo) << 24 | slot */
+    uint64_t *key, *tmp;  /* sort keys: row << 40 | q(lo) << 24 | slot */
     uint32_t *qhi;        /* per sorted box: q(hi) on the sweep axis */
     mk_aabb *box;         /* per sorted box: its AABB (sequential reads in the sweep) */
     uint32_t *big;        /* slots of boxes infinite on the row axis */
@@ -263,7 +265,7 @@ static int sort_keys(mk_bp *bp, const frame_ *f, int *nbig)
         const mk_aabb *b = &bp->box[s];
         if (!in_structure(bp, s)) continue;
         if (!(hi_of(b, f->ay) - lo_of(b, f->ay) <= MK_REAL_MAX)) { w->big[(*nbig)++] = s; continue; }
-        w->key[n++] = (uint64_t)row_of(f, lo_of(b, f->ay)) << 48 | (uint64_t)quantise(f, lo_of(b, f->ax)) << 24 | s;
+        w->key[n++] = (uint64_t)row_of(f, lo_of(b, f->ay)) << 40 | (uint64_t)quantise(f, lo_of(b, f->ax)) << 24 | s;
     }
     mk_sort_u64_by_(w->key, w->tmp, n, 3); /* the slot is payload: slot order breaks ties */
     for (i = 0; i < n; ++i) {
@@ -285,12 +287,12 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
     n = sort_keys(bp, &f, &nbig);
     c.bp = bp; c.w = bp->sweep; c.report = report;
     for (s = 0; s < n; s = e) {
-        uint64_t row = c.w->key[s] >> 48;
+        uint64_t row = c.w->key[s] >> 40;
         int u;
-        for (e = s + 1; e < n && c.w->key[e] >> 48 == row; ++e) {}
+        for (e = s + 1; e < n && c.w->key[e] >> 40 == row; ++e) {}
         if ((st = sweep_row(&c, s, e)) != MK_OK) return st;
-        if (e == n || c.w->key[e] >> 48 != row + 1) continue;
-        for (u = e + 1; u < n && c.w->key[u] >> 48 == row + 1; ++u) {}
+        if (e == n || c.w->key[e] >> 40 != row + 1) continue;
+        for (u = e + 1; u < n && c.w->key[u] >> 40 == row + 1; ++u) {}
         if ((st = sweep_rows(&c, s, e, e, u)) != MK_OK) return st;
     }
     return sweep_big(&c, n, nbig);

@@ -325,6 +325,20 @@ START_TEST(auto_switches_structure)
         ck_assert_int_eq(st.kind, MK_BP_HGRID);
         ck_assert_int_ge(st.switches, 1);
     }
+    /* The scene comes to rest: the host still moves every proxy, but to the
+     * box it already has (no move at all), and only 5 keep drifting: SAP. */
+    for (f = 100; f < 200; ++f) {
+        for (i = 0; i < w.n; ++i) {
+            if (i % 60 == 0) drift(&w, i, 1);
+            else move_obj(&w, i, w.o[i].box);
+        }
+        step(&w, f);
+    }
+    if (w.bp[3]) {
+        MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[3], &st), MK_OK);
+        ck_assert_int_eq(st.kind, MK_BP_SAP);
+        ck_assert_int_ge(st.switches, 2);
+    }
     world_fini(&w);
 }
 END_TEST
