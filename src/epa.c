@@ -271,7 +271,10 @@ static int flat_answer(const mk_pair *p, const mk_simplex *s, mk_epa_result *out
     return -1;
 }
 
-int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+/* The loop, inlined into one copy per specialised pair of shape types (as
+ * GJK's: the supports lose their type switches) and one generic copy. */
+MK_ALWAYS_INLINE int epa_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, const mk_simplex *s, mk_real scale,
+                              mk_epa_result *out)
 {
     epa_poly P;
     epa_face best;
@@ -287,7 +290,7 @@ int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *
         best = P.f[f]; /* expand may reuse f's slot before it finds a defect */
         out->iterations = it + 1;
         if (P.nv == MK_EPA_MAX_VERTICES) break;
-        w = mk_pair_support(p, best.n, P.v[best.v[0]].ia, P.v[best.v[0]].ib);
+        w = mk_pair_support_typed(p, ta, tb, best.n, P.v[best.v[0]].ia, P.v[best.v[0]].ib);
         if (known_vertex(&P, &w) || mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol) {
             /* w is the support along the answer's normal: its sep, for free */
             out->separation = -mk_v3_dot(best.n, w.w);
@@ -304,4 +307,33 @@ int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *
     answer(&P, &best, out);
     out->separation = separation_along(p, best.n, &out->face[0]);
     return 0;
+}
+
+static int epa_hull_hull(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    return epa_loop(p, MK_SHAPE_HULL, MK_SHAPE_HULL, s, scale, out);
+}
+
+static int epa_hull_box(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    return epa_loop(p, MK_SHAPE_HULL, MK_SHAPE_BOX, s, scale, out);
+}
+
+static int epa_box_hull(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    return epa_loop(p, MK_SHAPE_BOX, MK_SHAPE_HULL, s, scale, out);
+}
+
+static int epa_any(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    return epa_loop(p, p->a->type, p->b->type, s, scale, out);
+}
+
+int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    mk_shape_type ta = p->a->type, tb = p->b->type;
+    if (ta == MK_SHAPE_HULL && tb == MK_SHAPE_HULL) return epa_hull_hull(p, s, scale, out);
+    if (ta == MK_SHAPE_HULL && tb == MK_SHAPE_BOX) return epa_hull_box(p, s, scale, out);
+    if (ta == MK_SHAPE_BOX && tb == MK_SHAPE_HULL) return epa_box_hull(p, s, scale, out);
+    return epa_any(p, s, scale, out);
 }
