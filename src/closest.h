@@ -34,14 +34,36 @@ MK_ALWAYS_INLINE mk_hit mk_hit_grow(mk_vec3 a, mk_vec3 b, mk_real dc, mk_vec3 n,
     return h;
 }
 
+/* 1/sqrt(l2), and sqrt(l2) in *len, with the square root and the division
+ * side by side rather than one after the other: a closed form's time is
+ * mostly the latency of its chain of dependent operations. Where 1/l2 would
+ * overflow or vanish the division waits for the root; l2 == 0 gives 0. */
+MK_ALWAYS_INLINE mk_real mk_inv_len(mk_real l2, mk_real *len)
+{
+    mk_real l = mk_sqrt_(l2);
+    *len = l;
+    if (l2 >= 1 / MK_REAL_MAX && l2 <= MK_REAL_MAX) return l * (1 / l2);
+    return l > 0 ? 1 / l : 0;
+}
+
+/* v / |v|, and |v| in *len (mk_inv_len); a zero v gives the zero vector
+ * (callers pick their own direction). */
+MK_ALWAYS_INLINE mk_vec3 mk_unit_len(mk_vec3 v, mk_real *len) { return mk_v3_scale(v, mk_inv_len(mk_v3_len2(v), len)); }
+
+/* The point of a box core of half extents h nearest x (box frame). */
+MK_ALWAYS_INLINE mk_vec3 mk_box_clamp(mk_vec3 h, mk_vec3 x)
+{
+    return mk_v3(mk_clamp(x.x, -h.x, h.x), mk_clamp(x.y, -h.y, h.y), mk_clamp(x.z, -h.z, h.z));
+}
+
 /* A box core of half extents h, rounded by ra, against a sphere of radius
  * rb centred at c, in the box's frame. */
 MK_ALWAYS_INLINE mk_hit mk_closest_box_sphere(mk_vec3 h, mk_real ra, mk_vec3 c, mk_real rb)
 {
-    mk_vec3 q = mk_v3(mk_clamp(c.x, -h.x, h.x), mk_clamp(c.y, -h.y, h.y), mk_clamp(c.z, -h.z, h.z));
-    mk_vec3 dv = mk_v3_sub(c, q), n;
-    mk_real l = mk_v3_len(dv), gx, gy, gz, g;
-    if (l > 0) return mk_hit_grow(q, c, l, mk_v3_scale(dv, 1 / l), ra, rb);
+    mk_vec3 q = mk_box_clamp(h, c), n;
+    mk_real l, gx, gy, gz, g;
+    n = mk_unit_len(mk_v3_sub(c, q), &l);
+    if (l > 0) return mk_hit_grow(q, c, l, n, ra, rb);
     /* Centre inside the core: leave through the nearest face. */
     gx = h.x - mk_fabs_(c.x);
     gy = h.y - mk_fabs_(c.y);
@@ -66,11 +88,11 @@ MK_ALWAYS_INLINE mk_hit mk_closest_box_sphere(mk_vec3 h, mk_real ra, mk_vec3 c, 
  * origin, radius ra) against a sphere of radius rb centred at c. */
 MK_ALWAYS_INLINE mk_hit mk_closest_capsule_sphere(mk_real hh, mk_vec3 u, mk_real ra, mk_vec3 c, mk_real rb)
 {
-    mk_vec3 q = mk_v3_scale(u, mk_clamp(mk_v3_dot(c, u), -hh, hh)), dv = mk_v3_sub(c, q);
-    mk_real l = mk_v3_len(dv);
+    mk_vec3 q = mk_v3_scale(u, mk_clamp(mk_v3_dot(c, u), -hh, hh)), n;
+    mk_real l;
+    n = mk_unit_len(mk_v3_sub(c, q), &l);
     /* Centre on the segment: any direction across the axis is a shortest way out. */
-    mk_vec3 n = l > 0 ? mk_v3_scale(dv, 1 / l) : mk_v3_perp(u);
-    return mk_hit_grow(q, c, l, n, ra, rb);
+    return mk_hit_grow(q, c, l, l > 0 ? n : mk_v3_perp(u), ra, rb);
 }
 
 /* Closest parameters s, t of the segments {s U : |s| <= ha} and
@@ -128,7 +150,7 @@ MK_ALWAYS_INLINE mk_hit mk_closest_capsule_capsule(mk_real ha, mk_vec3 u, mk_rea
      * eps / sin(angle), so below sin^2 = sqrt(eps) the difference of the
      * points is the better normal. */
     if (mk_fabs_(s) < ha && mk_fabs_(t) < hb && w2 > mk_sqrt_(MK_REAL_EPSILON)) {
-        n = mk_v3_scale(axes, 1 / mk_sqrt_(w2));
+        n = mk_unit_len(axes, &l);
         l = mk_v3_dot(n, c);
         if (l < 0) {
             n = mk_v3_neg(n);
@@ -136,11 +158,8 @@ MK_ALWAYS_INLINE mk_hit mk_closest_capsule_capsule(mk_real ha, mk_vec3 u, mk_rea
         }
         pb = mk_v3_mad(pa, l, n);
     } else {
-        mk_vec3 dv = mk_v3_sub(pb, pa);
-        l = mk_v3_len(dv);
-        if (l > 0) {
-            n = mk_v3_scale(dv, 1 / l);
-        } else {
+        n = mk_unit_len(mk_v3_sub(pb, pa), &l);
+        if (!(l > 0)) {
             /* Parallel cores that overlap: leave across the axis, towards B's centre if it is off the axis. */
             mk_vec3 off = mk_v3_mad(c, -mk_v3_dot(c, u), u);
             n = mk_v3_len2(off) > 0 ? mk_v3_normalize(off) : mk_v3_perp(u);
