@@ -364,7 +364,9 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     if (sat.best - ra - rb > m->margin) return MK_OK;
     m->normal = sat.normal;
     m->cores_apart = sat.separation > 0;
-    if (sat.kind == MK_SAT_FACE_A) {
+    if (boxes && sat.kind != MK_SAT_EDGES) {
+        mk_mf_clip_boxes(m, p, sat.kind == MK_SAT_FACE_A, sat.kind == MK_SAT_FACE_A ? sat.a : sat.b, ra, rb);
+    } else if (sat.kind == MK_SAT_FACE_A) {
         polytope_face(a, sat.a, &ref);
         mk_support_feature(b, mk_mat3_tmul_v3(p->r, mk_v3_neg(sat.normal)), &inc);
         mk_feat_transform(&inc, p);
