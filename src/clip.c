@@ -536,7 +536,7 @@ static const signed char box_face_side[6][4][3] = {{{2, 1, 1}, {1, 1, 2}, {2, -1
 typedef struct box_vert {
     mk_real c[3];
     mk_feature fref, finc, edge;
-    int ref_edge;
+    signed char ref_edge; /* small, so a copy is a few wide moves */
 } box_vert;
 
 /* One Sutherland-Hodgman pass (clip_polygon's, with its slop rule) against
@@ -561,7 +561,7 @@ static int clip_box_side(int face, int q, mk_feature finc_face, mk_real sign, in
         if (ina == inb) continue;
         if ((ina ? da : db) > 0) { /* the inside end stands for the crossing (clip_polygon) */
             if (ina) {
-                dst[m - 1].ref_edge = q;
+                dst[m - 1].ref_edge = (signed char)q;
                 dst[m - 1].edge = E(box_face_edge[face][q]);
             }
             continue;
@@ -582,7 +582,7 @@ static int clip_box_side(int face, int q, mk_feature finc_face, mk_real sign, in
                 x->finc = finc_face;
             }
             if (ina) { /* leaving: the next edge runs along side q */
-                x->ref_edge = q;
+                x->ref_edge = (signed char)q;
                 x->edge = E(box_face_edge[face][q]);
             } else { /* entering: the rest of a's edge */
                 x->ref_edge = a->ref_edge;

@@ -468,7 +468,7 @@ static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair 
         const mk_mf_point *p = &m->p[i];
         mk_contact_point *c = &out->points[i];
         mk_vec3 pb = mk_v3_mad(p->pa, -p->depth, m->normal);
-        mk_vec3 wa = mk_v3_add(mk_mat3_mul_v3(R, p->pa), pa), wb = mk_v3_add(mk_mat3_mul_v3(R, pb), pa);
+        mk_vec3 wa = mk_v3_add(mk_mat3_mul_v3(R, p->pa), pa), wb = mk_v3_mad(wa, -p->depth, n); /* the contract's relation */
         mk_vec3 lb = mk_mat3_tmul_v3(pair->r, mk_v3_sub(pb, pair->t));
         c->depth = p->depth;
         c->flags = p->depth < 0 ? MK_CONTACT_SPECULATIVE : 0;
