@@ -184,9 +184,10 @@ static mk_status shape_plane(const mk_pair *p, mk_mf *m, mk_manifold_cache *cach
 
 #ifndef MK_WITHOUT_SAT
 /* Face/edge hysteresis of box pairs (mk_sat_options.prefer): last frame's
- * kind of axis (face of A, face of B, edge pair) is kept while its
- * separation is within 5 % of the best one's plus 0.5 % of the smaller box's
- * smallest half extent. Measured on two 0.7 x 0.7 x 0.3 boxes 1 mm deep,
+ * kind of face axis (face of A, face of B) is kept while its separation is
+ * within 5 % of the best one's plus 0.5 % of the smaller box's smallest half
+ * extent, and an edge pair must beat the face by as much (half as much when
+ * last frame's was an edge pair) to be taken. Measured on two 0.7 x 0.7 x 0.3 boxes 1 mm deep,
  * 1000 frames of random tilt noise: with no band the kind flips on 60 % of
  * frames even at 1e-4 rad (face A against face B: the exact minimum follows
  * the sign of the tilt), and the feature IDs with it; with this band it

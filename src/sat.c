@@ -255,20 +255,29 @@ static void ctx_init(sat_ctx *c, const mk_mat3 *R, mk_vec3 t, const mk_sat_optio
     axis_none(&c->edges);
 }
 
-/* The best axis overall, then the hysteresis of mk_sat_options. Ties go to
- * A's faces, then B's, then edges: face contacts are the stabler. */
+/* The best axis overall; ties go to A's faces, then B's, then edges: face
+ * contacts are the stabler. With a preference (a warm frame) the choice is
+ * biased as mk_sat_options says: first the face kind (last frame's kept
+ * while within the band of the better face), then edges only if they beat
+ * that face by the band, or by half of it when last frame was already an
+ * edge pair. The two thresholds make a hysteresis loop: a stack of nearly
+ * parallel boxes, whose edge pairs tie with the face to round-off, stays on
+ * its face clip, and a genuine edge contact does not flicker either. */
 static void finish(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *out)
 {
     const sat_axis *pick = &c->face_a;
     mk_sat_kind kind = MK_SAT_FACE_A;
     if (c->face_b.sep > pick->sep) pick = &c->face_b, kind = MK_SAT_FACE_B;
-    if (c->edges.sep > pick->sep) pick = &c->edges, kind = MK_SAT_EDGES;
-    out->best = pick->sep;
+    out->best = mk_max(pick->sep, c->edges.sep);
     out->complete = !c->stopped;
-    if (!c->stopped && opt->prefer != MK_SAT_NONE && opt->prefer != kind) {
-        const sat_axis *p = opt->prefer == MK_SAT_FACE_A ? &c->face_a : opt->prefer == MK_SAT_FACE_B ? &c->face_b : &c->edges;
-        if ((p->a >= 0 || p->b >= 0) && p->sep >= pick->sep - (opt->prefer_rel * mk_fabs_(pick->sep) + opt->prefer_abs))
-            pick = p, kind = opt->prefer;
+    if (c->stopped || opt->prefer == MK_SAT_NONE) {
+        if (c->edges.sep > pick->sep) pick = &c->edges, kind = MK_SAT_EDGES;
+    } else {
+        mk_real band = opt->prefer_rel * mk_fabs_(out->best) + opt->prefer_abs;
+        const sat_axis *f = opt->prefer == MK_SAT_FACE_A ? &c->face_a : &c->face_b;
+        if (opt->prefer != MK_SAT_EDGES && opt->prefer != kind && f->sep >= pick->sep - band) pick = f, kind = opt->prefer;
+        if (c->edges.a >= 0 && c->edges.sep > pick->sep + (opt->prefer == MK_SAT_EDGES ? band / 2 : band))
+            pick = &c->edges, kind = MK_SAT_EDGES;
     }
     out->kind = kind;
     out->a = pick->a;

@@ -43,11 +43,15 @@ typedef enum mk_sat_kind {
 
 typedef struct mk_sat_options {
     mk_real stop_above; /* stop once an axis separates by more than this */
-    /* Hysteresis. With prefer set (usually the previous frame's kind), the
-     * best axis of that kind is reported instead of the overall best when its
-     * separation is within prefer_rel * |best| + prefer_abs of best, so the
-     * manifold does not flip between a face and an edge contact on rounding.
-     * `best` itself is never biased, so depths stay exact. */
+    /* Face preference and hysteresis, with prefer set (usually the previous
+     * frame's kind; MK_SAT_NONE = none, the exact best axis). Let band =
+     * prefer_rel * |best| + prefer_abs. The face kind is the better face's,
+     * or the preferred face kind's if its separation is within band of it;
+     * an edge pair is reported only if it separates by more than that face
+     * plus band (band / 2 when prefer is MK_SAT_EDGES), as dBoxBox and Box2D
+     * favour faces, so nearly parallel boxes clip face to face and an axis
+     * does not flip on rounding. `best` itself is never biased; the
+     * reported separation is below it by at most band. */
     mk_sat_kind prefer;
     mk_real prefer_rel, prefer_abs;
 } mk_sat_options;

@@ -470,10 +470,11 @@ END_TEST
 
 START_TEST(hysteresis)
 {
-    /* prefer keeps the previous kind while it is within the tolerance, and
-     * only then; the best separation (the depth) is never biased. */
+    /* prefer keeps the previous face kind while it is within the tolerance,
+     * and only then; edge pairs must beat the faces by it; the best
+     * separation (the depth) is never biased. */
     mk_rng r = {25};
-    int i, switched = 0, kept = 0;
+    int i, switched = 0, kept = 0, edged = 0;
     for (i = 0; i < 300; ++i) {
         mk_hull *a = ellipsoid_hull(&r, 12, mk_rng_v3(&r, 0.3, 1)), *b = ellipsoid_hull(&r, 12, mk_rng_v3(&r, 0.3, 1));
         mk_mat3 R = mk_mat3_from_quat(mk_rng_quat(&r));
@@ -507,8 +508,41 @@ START_TEST(hysteresis)
                 REQUIRE(tight.kind == k, "switch within the relative tolerance");
                 o.prefer_rel = (base.best - loose.separation) / mk_fabs_(base.best) * (mk_real)0.99;
                 mk_sat(a, b, &R, t, &o, &tight);
-                REQUIRE(tight.kind == base.kind, "no switch outside the tolerance");
+                REQUIRE(tight.kind != k, "no switch outside the tolerance");
                 ++kept;
+            }
+        }
+        /* Face preference: warm, an edge pair must beat the better face by
+         * the band to be reported, by half the band when last frame's axis
+         * was already an edge pair (the hysteresis loop). */
+        if (base.kind == MK_SAT_EDGES) {
+            mk_sat_result faces;
+            mk_real gap;
+            o.prefer = MK_SAT_FACE_A;
+            o.prefer_rel = 0;
+            o.prefer_abs = (mk_real)1e9; /* the better face of each kind */
+            mk_sat(a, b, &R, t, &o, &faces);
+            REQUIRE(faces.kind == MK_SAT_FACE_A, "face preference ignored");
+            o.prefer = MK_SAT_FACE_B;
+            mk_sat(a, b, &R, t, &o, &tight);
+            if (tight.separation > faces.separation) faces = tight;
+            gap = base.best - faces.separation;
+            if (gap > 1e-3 * mk_fabs_(base.best) + 1e-3) {
+                ++edged;
+                o.prefer = faces.kind;
+                o.prefer_abs = gap * (mk_real)1.01;
+                mk_sat(a, b, &R, t, &o, &tight);
+                REQUIRE(tight.kind == faces.kind && tight.best == base.best, "edge pair within the band taken");
+                o.prefer_abs = gap * (mk_real)0.99;
+                mk_sat(a, b, &R, t, &o, &tight);
+                REQUIRE(tight.kind == MK_SAT_EDGES, "edge pair beyond the band not taken");
+                o.prefer = MK_SAT_EDGES;
+                o.prefer_abs = gap * (mk_real)2.02;
+                mk_sat(a, b, &R, t, &o, &tight);
+                REQUIRE(tight.kind == faces.kind, "edge pair kept within half the band");
+                o.prefer_abs = gap * (mk_real)1.98;
+                mk_sat(a, b, &R, t, &o, &tight);
+                REQUIRE(tight.kind == MK_SAT_EDGES, "edge pair dropped beyond half the band");
             }
         }
         mk_hull_destroy(a);
@@ -516,6 +550,7 @@ START_TEST(hysteresis)
     }
     ck_assert_int_gt(switched, 100);
     ck_assert_int_gt(kept, 50);
+    ck_assert_int_gt(edged, 10);
 }
 END_TEST
 

@@ -16,12 +16,16 @@
  * (minko/contact_cache.h). An optional caller-owned mk_manifold_cache per
  * pair (zero-initialised = cold) carries the previous frame's choices: for
  * boxes and hulls the kind of separating axis (face of A, face of B, edge
- * pair), kept while it stays within 5 % (plus 0.5 % of the size) of the best
- * one, and for the other pairs the reference face, kept while it faces the
- * normal within the tolerance, plus the GJK simplex. A rocking stack thus
- * keeps its normal and feature IDs; the price is that warm frames may report
- * the kept axis's depth instead of the minimum. A cold call (no cache, or a
- * new contact) is exact. Bad input (NULL, NaN/Inf, non-unit rotations,
+ * pair), a face kind kept while it stays within a band of 5 % of the depth
+ * plus 0.5 % of the smaller shape's size of the better face, and faces
+ * preferred: an edge pair is taken warm only when it beats the face by that
+ * band (by half of it when last frame was an edge pair), as ODE's dBoxBox
+ * and Box2D favour faces; for the other pairs the reference face, kept
+ * while it faces the normal within the tolerance, plus the GJK simplex. A
+ * rocking stack thus keeps its normal, its four points and its feature IDs;
+ * the price is that warm frames may report the kept axis's depth instead of
+ * the minimum, deeper by at most that band. A cold call (no cache, or a new
+ * contact) is exact. Bad input (NULL, NaN/Inf, non-unit rotations,
  * invalid shapes, a negative margin) returns a status and leaves *out
  * untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing allocates;
  * every query runs in A's local frame. Methods: closed forms for sphere,
