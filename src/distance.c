@@ -13,79 +13,54 @@ const char *mk_method_name(mk_method m)
     return (unsigned)m <= MK_METHOD_SAT ? names[m] : "unknown";
 }
 
-/* ---- dispatch ------------------------------------------------------------- */
-
-typedef enum path {
-    PATH_UNSUPPORTED = 0,
-    PATH_SPHERES,        /* closed form, world frame */
-    PATH_BOX_SPHERE,     /* closed form */
-    PATH_CAPSULE_SPHERE, /* closed form */
-    PATH_CAPSULES,       /* closed form: segment-segment */
-    PATH_PLANE,          /* closed form: support along the plane normal */
-    PATH_BOX_BOX,        /* SAT's 15 axes when the cores overlap, GJK for the distance otherwise */
-    PATH_GJK             /* GJK on the cores, EPA when they overlap */
-} path;
-
-/* [type of A][type of B] -> method; `swap` runs it as (B, A) and flips the answer. */
-typedef struct route { unsigned char path, swap; } route;
-#define R_(p, s) {PATH_##p, s}
-static const route routes[MK_SHAPE_TYPE_COUNT][MK_SHAPE_TYPE_COUNT] = {
-    /*            sphere                    box                   capsule                  cylinder       cone           hull           plane */
-    /* sphere */ {R_(SPHERES, 0),          R_(BOX_SPHERE, 1),    R_(CAPSULE_SPHERE, 1),   R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
-    /* box    */ {R_(BOX_SPHERE, 0),       R_(BOX_BOX, 0),       R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
-    /* capsule*/ {R_(CAPSULE_SPHERE, 0),   R_(GJK, 0),           R_(CAPSULES, 0),         R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
-    /* cyl.   */ {R_(GJK, 0),              R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
-    /* cone   */ {R_(GJK, 0),              R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
-    /* hull   */ {R_(GJK, 0),              R_(GJK, 0),           R_(GJK, 0),              R_(GJK, 0),    R_(GJK, 0),    R_(GJK, 0),    R_(PLANE, 0)},
-    /* plane  */ {R_(PLANE, 1),            R_(PLANE, 1),         R_(PLANE, 1),            R_(PLANE, 1),  R_(PLANE, 1),  R_(PLANE, 1),  R_(UNSUPPORTED, 0)},
-};
-#undef R_
-
 /* ---- validation ----------------------------------------------------------- */
 
-/* Every query pays this, so the accepting path is short: v - v is 0 for a
- * finite v and NaN otherwise, and a NaN or infinite quaternion fails the
- * unit-length test, after which we only work out which error to name. A
- * quaternion within MK_QUAT_TOLERANCE is accepted; paths that use it
- * renormalise it (unit). */
-MK_ALWAYS_INLINE mk_status check_pose(mk_transform x)
+/* Names the first thing wrong with a pose: non-finite numbers, then a
+ * quaternion that is not unit within MK_QUAT_TOLERANCE. */
+static mk_status check_pose(const mk_transform *x)
 {
-    mk_quat q = x.q;
-    if ((x.p.x - x.p.x) + (x.p.y - x.p.y) + (x.p.z - x.p.z) != 0) return MK_ERR_NOT_FINITE;
-    if (mk_fabs_(mk_quat_len2(q) - 1) <= MK_QUAT_TOLERANCE) return MK_OK;
-    return mk_real_is_valid(q.x) && mk_real_is_valid(q.y) && mk_real_is_valid(q.z) && mk_real_is_valid(q.w)
-               ? MK_ERR_BAD_ROTATION
-               : MK_ERR_NOT_FINITE;
+    mk_quat q = x->q;
+    if (!mk_v3_is_valid(x->p) || !mk_real_is_valid(q.x) || !mk_real_is_valid(q.y) || !mk_real_is_valid(q.z) ||
+        !mk_real_is_valid(q.w))
+        return MK_ERR_NOT_FINITE;
+    return mk_quat_is_valid(q) ? MK_OK : MK_ERR_BAD_ROTATION;
 }
 
-/* The closed forms' shapes, accepted without a call: exactly what
- * mk_shape_validate accepts for them (sizes in (0, MK_MAX_SIZE], NaN fails
- * every comparison); anything else goes to mk_shape_validate, which names the
- * error and knows every other shape. */
-MK_ALWAYS_INLINE int primitive_ok(const mk_shape *s)
-{
-    mk_real r = s->radius;
-    switch (s->type) {
-    case MK_SHAPE_SPHERE: return r > 0 && r <= MK_MAX_SIZE;
-    case MK_SHAPE_CAPSULE: return r > 0 && r <= MK_MAX_SIZE && s->u.capsule.half_height > 0 && s->u.capsule.half_height <= MK_MAX_SIZE;
-    case MK_SHAPE_BOX: {
-        mk_vec3 h = s->u.half_extents;
-        return r >= 0 && r <= MK_MAX_SIZE && h.x > 0 && h.x <= MK_MAX_SIZE && h.y > 0 && h.y <= MK_MAX_SIZE && h.z > 0 &&
-               h.z <= MK_MAX_SIZE;
-    }
-    default: return 0;
-    }
-}
-
-MK_ALWAYS_INLINE mk_status check_inputs(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb,
-                                        const void *out)
+/* The slow half of validation: names the first error in argument order.
+ * Called only on input the quick test below refused; the two accept exactly
+ * the same input (tests/test_distance.c, quick_test_matches_diagnosis), so
+ * it never returns MK_OK to a method that would then skip its answer. */
+static MK_NOINLINE mk_status diagnose(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb)
 {
     mk_status st;
-    if (!a || !b || !out) return MK_ERR_NULL;
-    if (!primitive_ok(a) && (st = mk_shape_validate(a)) != MK_OK) return st;
-    if (!primitive_ok(b) && (st = mk_shape_validate(b)) != MK_OK) return st;
+    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
     if ((st = check_pose(xa)) != MK_OK) return st;
     return check_pose(xb);
+}
+
+/* The quick test every query pays, for two shapes of types ta, tb: no call
+ * and, when ta and tb are constants, no switch. v - v is +0 for a finite v
+ * and NaN otherwise, so f is 0 exactly when the positions are finite, and
+ * adding it to |q|^2 - 1 folds that test into the unit-quaternion tests,
+ * which a NaN or infinite quaternion fails too. A quaternion within
+ * MK_QUAT_TOLERANCE is accepted; paths that use it rotate by the exact
+ * rotation it stands for (mk_rotation_of). */
+MK_ALWAYS_INLINE int accept(const mk_shape *a, mk_shape_type ta, const mk_transform *xa, const mk_shape *b, mk_shape_type tb,
+                            const mk_transform *xb)
+{
+    mk_real f = (xa->p.x - xa->p.x) + (xa->p.y - xa->p.y) + (xa->p.z - xa->p.z) + (xb->p.x - xb->p.x) + (xb->p.y - xb->p.y) +
+                (xb->p.z - xb->p.z);
+    return mk_shape_ok_typed_(a, ta) && mk_shape_ok_typed_(b, tb) &&
+           mk_fabs_(mk_quat_len2(xa->q) - 1 + f) <= MK_QUAT_TOLERANCE && mk_fabs_(mk_quat_len2(xb->q) - 1 + f) <= MK_QUAT_TOLERANCE;
+}
+
+/* Validation of two non-NULL shapes of any type and their poses. */
+static mk_status check(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb)
+{
+    return (unsigned)a->type < MK_SHAPE_TYPE_COUNT && (unsigned)b->type < MK_SHAPE_TYPE_COUNT &&
+                   accept(a, a->type, xa, b, b->type, xb)
+               ? MK_OK
+               : diagnose(a, xa, b, xb);
 }
 
 /* ---- the iterative path ----------------------------------------------------- */
@@ -101,12 +76,7 @@ typedef struct answer {
 /* A core answer grown by the rounding radii. */
 static mk_hit grow_core(mk_vec3 a, mk_vec3 b, mk_real dc, mk_vec3 n, const mk_pair *p)
 {
-    mk_hit h;
-    h.distance = dc - p->a->radius - p->b->radius;
-    h.normal = n;
-    h.a = mk_v3_mad(a, p->a->radius, n);
-    h.b = mk_v3_mad(b, -p->b->radius, n);
-    return h;
+    return mk_hit_grow(a, b, dc, n, p->a->radius, p->b->radius);
 }
 
 /* Witness points for a final distance d along n, centred on the solver's
@@ -159,10 +129,9 @@ static mk_status iterative(const mk_pair *p, mk_gjk_cache *cache, answer *ans)
         return MK_ERR_UNSUPPORTED;
 #else
         mk_epa_result e;
-        int ha = -1, hb = -1;
         mk_epa(p, &g.s, g.scale, &e);
         n = e.normal;
-        sep = mk_pair_separation(p, n, &ha, &hb);
+        sep = e.separation;
         weighted(e.face, e.l, 3, &pa, &pb);
         ans->iterations += e.iterations;
         if (e.state != MK_SOLVE_CONVERGED) ans->state = e.state;
@@ -240,24 +209,30 @@ static int face_witness(mk_vec3 hf, mk_vec3 ho, const mk_mat3 *r_o, mk_vec3 t_o,
     return in_box(ho, mk_mat3_tmul_v3(*r_o, mk_v3_sub(y, t_o)), tol);
 }
 
-/* Face witnesses with A, then B, as the box the other's corner projects on. */
-static int face_witnesses(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+/* Face witnesses with A as the box B's supporting corner projects on. */
+static int face_witness_on_a(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
 {
-    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, qa, qb, tb, nb;
-    mk_mat3 rt;
     int f = -1;
     *pb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &f)), p->t);
-    if (face_witness(ha, hb, &p->r, p->t, *pb, d, n, tol, pa, pb)) return 1;
-    /* in B's frame, with B's axes and A's corner */
-    rt = mk_mat3_transpose(p->r);
-    tb = mk_v3_neg(mk_mat3_tmul_v3(p->r, p->t));
-    nb = mk_mat3_tmul_v3(p->r, mk_v3_neg(n));
-    f = -1;
+    return face_witness(p->a->u.half_extents, p->b->u.half_extents, &p->r, p->t, *pb, d, n, tol, pa, pb);
+}
+
+/* The same with B as the face box, worked in B's frame with A's corner. */
+static int face_witness_on_b(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+{
+    mk_mat3 rt = mk_mat3_transpose(p->r);
+    mk_vec3 tb = mk_v3_neg(mk_mat3_tmul_v3(p->r, p->t)), nb = mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), qa, qb;
+    int f = -1;
     qa = mk_v3_add(mk_mat3_mul_v3(rt, mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &f)), tb);
-    if (!face_witness(hb, ha, &rt, tb, qa, d, nb, tol, &qb, &qa)) return 0;
+    if (!face_witness(p->b->u.half_extents, p->a->u.half_extents, &rt, tb, qa, d, nb, tol, &qb, &qa)) return 0;
     *pa = mk_v3_add(mk_mat3_mul_v3(p->r, qa), p->t);
     *pb = mk_v3_add(mk_mat3_mul_v3(p->r, qb), p->t);
     return 1;
+}
+
+static int face_witnesses(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+{
+    return face_witness_on_a(p, d, n, tol, pa, pb) || face_witness_on_b(p, d, n, tol, pa, pb);
 }
 
 /* sep(u) of two box cores for a unit u from A towards B, in closed form. */
@@ -318,6 +293,35 @@ static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d
     return corner_certified(p, side, corner, tol, d, pa, pb);
 }
 
+/* The best of the six face axes of two box cores (A's e_i, B's R_j, each
+ * turned to point from A towards B) in closed form: the face-axis half of
+ * SAT, which a separated pair often needs alone (box_box_sat). */
+static mk_real box_face_axes(const mk_pair *p, mk_vec3 *n, int *of_b)
+{
+    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, tb = mk_mat3_tmul_v3(p->r, p->t);
+    mk_mat3 ar = mk_mat3_abs(p->r);
+    /* B's extent along A's axes is |R| hb, A's along B's is |R|^T ha. */
+    mk_vec3 sa = mk_v3_sub(mk_v3_sub(mk_v3_abs(p->t), ha), mk_mat3_mul_v3(ar, hb));
+    mk_vec3 sb = mk_v3_sub(mk_v3_sub(mk_v3_abs(tb), hb), mk_mat3_tmul_v3(ar, ha));
+    mk_real best = sa.x, s;
+    int axis = 0;
+    if (sa.y > best) best = sa.y, axis = 1;
+    if (sa.z > best) best = sa.z, axis = 2;
+    if (sb.x > best) best = sb.x, axis = 3;
+    if (sb.y > best) best = sb.y, axis = 4;
+    if (sb.z > best) best = sb.z, axis = 5;
+    *of_b = axis >= 3;
+    switch (axis) {
+    case 0: *n = mk_v3(p->t.x >= 0 ? 1 : -1, 0, 0); break;
+    case 1: *n = mk_v3(0, p->t.y >= 0 ? 1 : -1, 0); break;
+    case 2: *n = mk_v3(0, 0, p->t.z >= 0 ? 1 : -1); break;
+    default:
+        s = (axis == 3 ? tb.x : axis == 4 ? tb.y : tb.z) >= 0 ? 1 : -1;
+        *n = mk_v3_scale(axis == 3 ? p->r.c0 : axis == 4 ? p->r.c1 : p->r.c2, s);
+    }
+    return best;
+}
+
 /* Box cores by SAT's 15 axes (face normals and edge cross products of the
  * original boxes, about a tenth of GJK + EPA). Its best axis gives a bound
  * that is exact for overlapping cores; for separated ones it is a lower bound
@@ -326,38 +330,48 @@ static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d
  * separation apart along the axis they are an upper bound equal to it, and
  * the answer is certified exact with no GJK: about 70% of random separated
  * pairs (corner-face and edge-edge closest features), every crossing rod and
- * every overlapping pair of issue 2's families. Separated pairs whose closest
- * features are a corner and an edge (or two corners) are certified by the
- * corner and its clamp (corner_witnesses). Otherwise (ties at rounding level)
- * returns 0 and GJK, then EPA if the cores overlap, answers. */
+ * every overlapping pair of issue 2's families. Any axis with such witnesses
+ * certifies the distance (no other axis can separate by more than two actual
+ * surface points are apart), so a pair whose best face axis already
+ * separates tries that axis first and skips the nine edge axes when it
+ * holds: corner-face pairs, most separated pairs, pay about half as much.
+ * Separated pairs whose closest features are a corner and an edge (or two
+ * corners) are certified by the corner and its clamp (corner_witnesses).
+ * Otherwise (ties at rounding level) returns 0 and GJK, then EPA if the cores
+ * overlap, answers. */
 static int box_box_sat(const mk_pair *p, answer *ans)
 {
     mk_sat_options o = mk_sat_defaults();
     mk_sat_result s;
     mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, n, pa, pb;
     mk_real tol = 64 * MK_REAL_EPSILON * (mk_v3_max_abs(ha) + mk_v3_max_abs(hb) + mk_v3_max_abs(p->t)), d;
-    int ok = 0;
-    mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
-    d = s.best;
-    n = s.normal;
-    if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
-    if (s.kind == MK_SAT_EDGES) { /* the closest points of the two supporting edges */
-        mk_vec3 a0, a1, b0, b1;
-        mk_real u, v;
-        box_support_edge(ha, n, &a0, &a1);
-        box_support_edge(hb, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &b0, &b1);
-        b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
-        b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
-        mk_segment_segment(a0, a1, b0, b1, &u, &v);
-        pa = mk_v3_lerp(a0, a1, u);
-        pb = mk_v3_lerp(b0, b1, v);
-        ok = mk_v3_max_abs(mk_v3_sub(mk_v3_sub(pb, pa), mk_v3_scale(n, d))) <= tol;
-    }
-    /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
-    if (!ok && !face_witnesses(p, d, n, tol, &pa, &pb)) {
-        /* Apart, but no feature pair realises SAT's bound: a corner may. */
-        if (!(d > 0) || !corner_witnesses(p, n, tol, &d, &pa, &pb)) return 0;
-        n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
+    int ok = 0, of_b;
+    d = box_face_axes(p, &n, &of_b);
+    /* B's corner under A's face, or A's under B's: the other side almost never
+     * holds off parallel faces, which SAT's path below still tries. */
+    if (!(d > 0) || !(of_b ? face_witness_on_b : face_witness_on_a)(p, d, n, tol, &pa, &pb)) {
+        mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
+        d = s.best;
+        n = s.normal;
+        if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
+        if (s.kind == MK_SAT_EDGES) { /* the closest points of the two supporting edges */
+            mk_vec3 a0, a1, b0, b1;
+            mk_real u, v;
+            box_support_edge(ha, n, &a0, &a1);
+            box_support_edge(hb, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &b0, &b1);
+            b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
+            b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
+            mk_segment_segment(a0, a1, b0, b1, &u, &v);
+            pa = mk_v3_lerp(a0, a1, u);
+            pb = mk_v3_lerp(b0, b1, v);
+            ok = mk_v3_max_abs(mk_v3_sub(mk_v3_sub(pb, pa), mk_v3_scale(n, d))) <= tol;
+        }
+        /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
+        if (!ok && !face_witnesses(p, d, n, tol, &pa, &pb)) {
+            /* Apart, but no feature pair realises SAT's bound: a corner may. */
+            if (!(d > 0) || !corner_witnesses(p, n, tol, &d, &pa, &pb)) return 0;
+            n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
+        }
     }
     witnesses(pa, pb, d, n, &pa, &pb);
     ans->hit = grow_core(pa, pb, d, n, p);
@@ -370,124 +384,253 @@ static int box_box_sat(const mk_pair *p, answer *ans)
 
 /* ---- composition ---------------------------------------------------------- */
 
-/* Runs a path in the frame of its first shape: A's rotation goes to *ra for
- * the way back (the identity for capsule paths, which run world-aligned about
- * A's centre). Only what the path uses is computed: a sphere's rotation never
- * matters, a capsule is its axis. */
-MK_ALWAYS_INLINE mk_status run(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, path pth,
-                     mk_gjk_cache *cache, mk_mat3 *ra, answer *ans)
+/* Writes an answer given in world orientation: distance d along the normal n
+ * from A's witness a. b is rebuilt from a, so point_b = point_a + distance *
+ * normal holds to one rounding. `flip`: the pair ran as (B, A). */
+MK_ALWAYS_INLINE void put(mk_real d, mk_vec3 n, mk_vec3 a, int flip, int iterations, mk_method method, mk_solve_state state,
+                          mk_distance_result *r)
 {
-    mk_pair p;
-    mk_vec3 c = mk_v3_sub(xb.p, xa.p);
-    ans->iterations = 0;
-    ans->method = MK_METHOD_CLOSED_FORM;
-    ans->state = MK_SOLVE_CONVERGED;
-    switch (pth) {
-    case PATH_CAPSULE_SPHERE:
-        *ra = mk_mat3_identity();
-        ans->hit = mk_closest_capsule_sphere(a->u.capsule.half_height, mk_axis_of(xa.q), a->radius, c, b->radius);
-        return MK_OK;
-    case PATH_CAPSULES:
-        *ra = mk_mat3_identity();
-        ans->hit = mk_closest_capsule_capsule(a->u.capsule.half_height, mk_axis_of(xa.q), a->radius, c, mk_axis_of(xb.q),
-                                              b->u.capsule.half_height, b->radius);
-        return MK_OK;
-    case PATH_BOX_SPHERE:
-        *ra = mk_rotation_of(xa.q);
-        ans->hit = mk_closest_box_sphere(a->u.half_extents, a->radius, mk_mat3_tmul_v3(*ra, c), b->radius);
-        return MK_OK;
-    default: break;
-    }
-    *ra = mk_rotation_of(xa.q);
-    p = mk_pair_in(a, *ra, xa.p, b, xb);
-    switch (pth) {
-    case PATH_PLANE: ans->hit = mk_closest_shape_plane(&p); return MK_OK;
-    case PATH_BOX_BOX: /* pairs SAT cannot certify (or no SAT in this build) go on to GJK */
+    mk_vec3 b = mk_v3_mad(a, d, n);
+    r->distance = d;
+    r->normal = flip ? mk_v3_neg(n) : n;
+    r->point_a = flip ? b : a;
+    r->point_b = flip ? a : b;
+    r->iterations = iterations;
+    r->method = method;
+    r->state = state;
+}
+
+/* An answer in the frame of the first shape as run (rotation ra, origin pa). */
+MK_ALWAYS_INLINE void put_framed(const mk_hit *h, const mk_mat3 *ra, mk_vec3 pa, int flip, int iterations, mk_method method,
+                                 mk_solve_state state, mk_distance_result *r)
+{
+    put(h->distance, mk_mat3_mul_v3(*ra, h->normal), mk_v3_add(mk_mat3_mul_v3(*ra, h->a), pa), flip, iterations, method, state, r);
+}
+
+/* A closed form answered world-aligned about A's centre pa (capsule and
+ * sphere paths): no rotation back. */
+MK_ALWAYS_INLINE void put_aligned(mk_hit h, mk_vec3 pa, int flip, mk_distance_result *r)
+{
+    put(h.distance, h.normal, mk_v3_add(h.a, pa), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+}
+
+/* The closed forms read only the parts of the poses their pair uses: the
+ * centres, a capsule's axis, a box's rotation. */
+MK_ALWAYS_INLINE void spheres(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                              mk_distance_result *r)
+{
+    mk_vec3 d = mk_v3_sub(xb->p, xa->p);
+    mk_real l = mk_v3_len(d);
+    /* Concentric spheres: every direction is a shortest way out; take +z. */
+    mk_vec3 n = l > 0 ? mk_v3_scale(d, 1 / l) : mk_v3(0, 0, 1);
+    put(l - a->radius - b->radius, n, mk_v3_mad(xa->p, a->radius, n), 0, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+}
+
+MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb, int flip,
+                                 mk_distance_result *r)
+{
+    mk_mat3 ra = mk_rotation_of(xa->q);
+    mk_hit h = mk_closest_box_sphere(a->u.half_extents, a->radius, mk_mat3_tmul_v3(ra, mk_v3_sub(xb->p, xa->p)), b->radius);
+    put_framed(&h, &ra, xa->p, flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+}
+
+MK_ALWAYS_INLINE void capsule_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                                     int flip, mk_distance_result *r)
+{
+    put_aligned(mk_closest_capsule_sphere(a->u.capsule.half_height, mk_axis_of(xa->q), a->radius, mk_v3_sub(xb->p, xa->p),
+                                          b->radius),
+                xa->p, flip, r);
+}
+
+MK_ALWAYS_INLINE void capsules(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                               mk_distance_result *r)
+{
+    put_aligned(mk_closest_capsule_capsule(a->u.capsule.half_height, mk_axis_of(xa->q), a->radius, mk_v3_sub(xb->p, xa->p),
+                                           mk_axis_of(xb->q), b->u.capsule.half_height, b->radius),
+                xa->p, 0, r);
+}
+
+/* The methods that run in A's frame with B's whole relative pose. */
+typedef enum framed_method { FRAMED_PLANE, FRAMED_BOX_BOX, FRAMED_GJK } framed_method;
+
+/* Planes, box pairs, GJK and EPA: in A's frame with B's whole relative pose
+ * (mk_pair). Out of line, so that no closed form pays for its stack frame. */
+static MK_NOINLINE mk_status framed(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                                    framed_method m, int flip, mk_gjk_cache *cache, mk_distance_result *r)
+{
+    mk_mat3 ra = mk_rotation_of(xa->q);
+    mk_pair p = mk_pair_in(a, ra, xa->p, b, *xb);
+    answer ans;
+    ans.iterations = 0;
+    ans.method = MK_METHOD_CLOSED_FORM;
+    ans.state = MK_SOLVE_CONVERGED;
+    switch (m) {
+    case FRAMED_PLANE: ans.hit = mk_closest_shape_plane(&p); break;
+    case FRAMED_BOX_BOX: /* pairs SAT cannot certify (or no SAT in this build) go on to GJK */
 #ifndef MK_WITHOUT_SAT
-        if (box_box_sat(&p, ans)) return MK_OK;
+        if (box_box_sat(&p, &ans)) break;
 #endif
         /* fall through */
-    case PATH_GJK:
+    case FRAMED_GJK: {
 #ifdef MK_WITHOUT_GJK
         (void)cache;
         return MK_ERR_UNSUPPORTED;
 #else
-        return iterative(&p, cache, ans);
+        mk_status st = iterative(&p, cache, &ans);
+        if (st != MK_OK) return st;
+        break;
 #endif
-    default: return MK_ERR_UNSUPPORTED;
     }
+    }
+    put_framed(&ans.hit, &ra, xa->p, flip, ans.iterations, ans.method, ans.state, r);
+    return MK_OK;
 }
 
-/* Sphere pairs never build a frame: centres and radii only. */
-static void spheres(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_distance_result *r)
+/* ---- dispatch ------------------------------------------------------------- */
+
+/* One method per ordered pair of shape types: it validates its own input (so
+ * a closed form checks its two known types with no switch) and answers.
+ * Methods named X_Y with a pair that has a closed form only one way round
+ * run it as (Y, X) and flip the answer back. Shapes are not NULL. */
+typedef mk_status (*pair_fn)(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                             mk_gjk_cache *cache, mk_distance_result *r);
+
+static mk_status q_spheres(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                           mk_gjk_cache *cache, mk_distance_result *r)
 {
-    mk_vec3 d = mk_v3_sub(xb.p, xa.p);
-    mk_real l = mk_v3_len(d);
-    /* Concentric spheres: every direction is a shortest way out; take +z. */
-    mk_vec3 n = l > 0 ? mk_v3_scale(d, 1 / l) : mk_v3(0, 0, 1);
-    r->distance = l - a->radius - b->radius;
-    r->normal = n;
-    r->point_a = mk_v3_mad(xa.p, a->radius, n);
-    r->point_b = mk_v3_mad(xb.p, -b->radius, n);
-    r->iterations = 0;
-    r->method = MK_METHOD_CLOSED_FORM;
-    r->state = MK_SOLVE_CONVERGED;
+    (void)cache;
+    if (!accept(a, MK_SHAPE_SPHERE, xa, b, MK_SHAPE_SPHERE, xb)) return diagnose(a, xa, b, xb);
+    spheres(a, xa, b, xb, r);
+    return MK_OK;
 }
 
-/* b is rebuilt from a, so point_b = point_a + distance * normal holds in the
- * world frame to one rounding, and one rotation is saved. */
-static void to_world(const answer *ans, mk_mat3 ra, mk_vec3 pa, int flip, mk_distance_result *r)
+static mk_status q_box_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                              mk_gjk_cache *cache, mk_distance_result *r)
 {
-    mk_vec3 n = mk_mat3_mul_v3(ra, ans->hit.normal), a = mk_v3_add(mk_mat3_mul_v3(ra, ans->hit.a), pa);
-    mk_vec3 b = mk_v3_mad(a, ans->hit.distance, n);
-    r->distance = ans->hit.distance;
-    r->normal = flip ? mk_v3_neg(n) : n;
-    r->point_a = flip ? b : a;
-    r->point_b = flip ? a : b;
-    r->iterations = ans->iterations;
-    r->method = ans->method;
-    r->state = ans->state;
+    (void)cache;
+    if (!accept(a, MK_SHAPE_BOX, xa, b, MK_SHAPE_SPHERE, xb)) return diagnose(a, xa, b, xb);
+    box_sphere(a, xa, b, xb, 0, r);
+    return MK_OK;
+}
+
+static mk_status q_sphere_box(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                              mk_gjk_cache *cache, mk_distance_result *r)
+{
+    (void)cache;
+    if (!accept(b, MK_SHAPE_BOX, xb, a, MK_SHAPE_SPHERE, xa)) return diagnose(a, xa, b, xb);
+    box_sphere(b, xb, a, xa, 1, r);
+    return MK_OK;
+}
+
+static mk_status q_capsule_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                                  mk_gjk_cache *cache, mk_distance_result *r)
+{
+    (void)cache;
+    if (!accept(a, MK_SHAPE_CAPSULE, xa, b, MK_SHAPE_SPHERE, xb)) return diagnose(a, xa, b, xb);
+    capsule_sphere(a, xa, b, xb, 0, r);
+    return MK_OK;
+}
+
+static mk_status q_sphere_capsule(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                                  mk_gjk_cache *cache, mk_distance_result *r)
+{
+    (void)cache;
+    if (!accept(b, MK_SHAPE_CAPSULE, xb, a, MK_SHAPE_SPHERE, xa)) return diagnose(a, xa, b, xb);
+    capsule_sphere(b, xb, a, xa, 1, r);
+    return MK_OK;
+}
+
+static mk_status q_capsules(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                            mk_gjk_cache *cache, mk_distance_result *r)
+{
+    (void)cache;
+    if (!accept(a, MK_SHAPE_CAPSULE, xa, b, MK_SHAPE_CAPSULE, xb)) return diagnose(a, xa, b, xb);
+    capsules(a, xa, b, xb, r);
+    return MK_OK;
+}
+
+static mk_status q_shape_plane(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                               mk_gjk_cache *cache, mk_distance_result *r)
+{
+    if (!accept(a, a->type, xa, b, MK_SHAPE_PLANE, xb)) return diagnose(a, xa, b, xb);
+    return framed(a, xa, b, xb, FRAMED_PLANE, 0, cache, r);
+}
+
+static mk_status q_plane_shape(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                               mk_gjk_cache *cache, mk_distance_result *r)
+{
+    if (!accept(b, b->type, xb, a, MK_SHAPE_PLANE, xa)) return diagnose(a, xa, b, xb);
+    return framed(b, xb, a, xa, FRAMED_PLANE, 1, cache, r);
+}
+
+static mk_status q_box_box(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                           mk_gjk_cache *cache, mk_distance_result *r)
+{
+    if (!accept(a, MK_SHAPE_BOX, xa, b, MK_SHAPE_BOX, xb)) return diagnose(a, xa, b, xb);
+    return framed(a, xa, b, xb, FRAMED_BOX_BOX, 0, cache, r);
+}
+
+static mk_status q_gjk(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                       mk_gjk_cache *cache, mk_distance_result *r)
+{
+    if (!accept(a, a->type, xa, b, b->type, xb)) return diagnose(a, xa, b, xb);
+    return framed(a, xa, b, xb, FRAMED_GJK, 0, cache, r);
+}
+
+/* Plane-plane pairs, and shapes of unknown type (which validation names). */
+static mk_status q_unsupported(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                               mk_gjk_cache *cache, mk_distance_result *r)
+{
+    mk_status st = check(a, xa, b, xb);
+    (void)cache;
+    (void)r;
+    return st != MK_OK ? st : MK_ERR_UNSUPPORTED;
+}
+
+static const pair_fn methods[MK_SHAPE_TYPE_COUNT][MK_SHAPE_TYPE_COUNT] = {
+    /*            sphere             box            capsule            cylinder       cone           hull           plane */
+    /* sphere */ {q_spheres,         q_sphere_box,  q_sphere_capsule,  q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
+    /* box    */ {q_box_sphere,      q_box_box,     q_gjk,             q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
+    /* capsule*/ {q_capsule_sphere,  q_gjk,         q_capsules,        q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
+    /* cyl.   */ {q_gjk,             q_gjk,         q_gjk,             q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
+    /* cone   */ {q_gjk,             q_gjk,         q_gjk,             q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
+    /* hull   */ {q_gjk,             q_gjk,         q_gjk,             q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
+    /* plane  */ {q_plane_shape,     q_plane_shape, q_plane_shape,     q_plane_shape, q_plane_shape, q_plane_shape, q_unsupported},
+};
+
+static pair_fn method_of(const mk_shape *a, const mk_shape *b)
+{
+    unsigned ta = (unsigned)a->type, tb = (unsigned)b->type;
+    return ta < MK_SHAPE_TYPE_COUNT && tb < MK_SHAPE_TYPE_COUNT ? methods[ta][tb] : q_unsupported;
 }
 
 mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
                       mk_distance_result *out)
 {
-    mk_status st = check_inputs(a, xa, b, xb, out);
-    route rt;
-    answer ans;
-    mk_mat3 ra;
-    if (st != MK_OK) return st;
-    rt = routes[a->type][b->type];
-    if (rt.path == PATH_SPHERES) {
-        spheres(a, xa, b, xb, out);
-        return MK_OK;
-    }
-    if (rt.swap) mk_swap_pair_(&a, &xa, &b, &xb); /* run as (B, A), flip on the way out */
-    st = run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
-    if (st != MK_OK) return st;
-    to_world(&ans, ra, xa.p, rt.swap, out);
-    return MK_OK;
+    if (!a || !b || !out) return MK_ERR_NULL;
+    return method_of(a, b)(a, &xa, b, &xb, cache, out);
 }
 
 mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
                      int *overlapping)
 {
-    mk_status st = check_inputs(a, xa, b, xb, overlapping);
-    route rt;
-    answer ans;
-    mk_mat3 ra;
-    if (st != MK_OK) return st;
-    rt = routes[a->type][b->type];
-    if (rt.path == PATH_SPHERES) {
+    pair_fn m;
+    mk_distance_result r;
+    mk_status st;
+    if (!a || !b || !overlapping) return MK_ERR_NULL;
+    m = method_of(a, b);
+    if (m == q_spheres) { /* no square root */
         mk_vec3 d = mk_v3_sub(xb.p, xa.p);
-        mk_real r = a->radius + b->radius;
-        *overlapping = mk_v3_len2(d) <= r * r;
+        mk_real s = a->radius + b->radius;
+        if ((st = check(a, &xa, b, &xb)) != MK_OK) return st;
+        *overlapping = mk_v3_len2(d) <= s * s;
         return MK_OK;
     }
 #ifndef MK_WITHOUT_GJK
-    if (rt.path == PATH_GJK || rt.path == PATH_BOX_BOX) {
+    if (m == q_gjk || m == q_box_box) { /* GJK stops at the first separating axis or enclosing simplex */
         mk_pair p;
         mk_gjk_result g;
+        if ((st = check(a, &xa, b, &xb)) != MK_OK) return st;
         p = mk_pair_make(a, xa, b, xb);
         mk_gjk(&p, cache, 1, a->radius + b->radius, &g);
         if (cache) mk_gjk_cache_store(&g.s, g.normal, cache);
@@ -495,9 +638,8 @@ mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
         return MK_OK;
     }
 #endif
-    st = rt.swap ? run(b, xb, a, xa, (path)rt.path, cache, &ra, &ans) : run(a, xa, b, xb, (path)rt.path, cache, &ra, &ans);
-    if (st != MK_OK) return st;
-    *overlapping = ans.hit.distance <= 0;
+    if ((st = m(a, &xa, b, &xb, cache, &r)) != MK_OK) return st;
+    *overlapping = r.distance <= 0;
     return MK_OK;
 }
 
@@ -538,11 +680,12 @@ static int nearest_vertex(const mk_shape *s, mk_vec3 q, int start)
 
 mk_status mk_approx_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_real *out)
 {
-    mk_status st = check_inputs(a, xa, b, xb, out);
+    mk_status st;
     mk_pair p;
     mk_vec3 va, vb;
     int ia = -1, ib;
-    if (st != MK_OK) return st;
+    if (!a || !b || !out) return MK_ERR_NULL;
+    if ((st = check(a, &xa, b, &xb)) != MK_OK) return st;
     if (!mk_core_is_polytope(a) || !mk_core_is_polytope(b)) return MK_ERR_UNSUPPORTED;
     p = mk_pair_make(a, xa, b, xb);
     /* Start from A's vertex facing B rather than an arbitrary one: one support, a better bound. */

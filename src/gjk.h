@@ -70,7 +70,7 @@ typedef struct mk_gjk_result {
  * MK_QUAT_TOLERANCE): 2 (1 - e + e^2) is off by 2 e^3, below the rounding of
  * either precision (2e-18 in double, 2e-12 in float), and it keeps a division
  * off the head of every query's dependency chain. */
-static inline mk_real mk_two_over_len2(mk_quat q)
+MK_ALWAYS_INLINE mk_real mk_two_over_len2(mk_quat q)
 {
     mk_real e = mk_quat_len2(q) - 1;
     return 2 * (1 - e * (1 - e));
@@ -79,7 +79,7 @@ static inline mk_real mk_two_over_len2(mk_quat q)
 /* Rotation matrix of a quaternion that is unit only to within
  * MK_QUAT_TOLERANCE: the usual formula with 2/|q|^2 in place of 2 is an exact
  * rotation for any such q, so no square root and no renormalised copy. */
-static inline mk_mat3 mk_rotation_of(mk_quat q)
+MK_ALWAYS_INLINE mk_mat3 mk_rotation_of(mk_quat q)
 {
     mk_real s = mk_two_over_len2(q);
     mk_real xs = q.x * s, ys = q.y * s, zs = q.z * s;
@@ -91,7 +91,7 @@ static inline mk_mat3 mk_rotation_of(mk_quat q)
 
 /* The image of the local z axis (capsule, cylinder and cone axes): the
  * third column of mk_rotation_of(q), without the other two. */
-static inline mk_vec3 mk_axis_of(mk_quat q)
+MK_ALWAYS_INLINE mk_vec3 mk_axis_of(mk_quat q)
 {
     mk_real s = mk_two_over_len2(q);
     return mk_v3((q.x * q.z + q.w * q.y) * s, (q.y * q.z - q.w * q.x) * s, 1 - (q.x * q.x + q.y * q.y) * s);

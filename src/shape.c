@@ -3,14 +3,11 @@
 
 #include "shape_internal.h"
 
-static int size_ok(mk_real v) { return v > 0 && v <= MK_MAX_SIZE; }            /* false for NaN */
-static int rounding_ok(mk_real v) { return v >= 0 && v <= MK_MAX_SIZE; }
-
 /* Finite-check first so a NaN size reports "not finite" rather than "bad size". */
-static mk_status check_size(mk_real v) { return !mk_real_is_valid(v) ? MK_ERR_NOT_FINITE : size_ok(v) ? MK_OK : MK_ERR_BAD_SIZE; }
+static mk_status check_size(mk_real v) { return !mk_real_is_valid(v) ? MK_ERR_NOT_FINITE : mk_size_ok_(v) ? MK_OK : MK_ERR_BAD_SIZE; }
 static mk_status check_rounding(mk_real v)
 {
-    return !mk_real_is_valid(v) ? MK_ERR_NOT_FINITE : rounding_ok(v) ? MK_OK : MK_ERR_BAD_SIZE;
+    return !mk_real_is_valid(v) ? MK_ERR_NOT_FINITE : mk_rounding_ok_(v) ? MK_OK : MK_ERR_BAD_SIZE;
 }
 
 const char *mk_shape_type_name(mk_shape_type t)
@@ -45,7 +42,7 @@ mk_status mk_shape_validate(const mk_shape *s)
         return (s->u.hull->vertex_count >= 4 && s->u.hull->face_count >= 4) ? MK_OK : MK_ERR_DEGENERATE;
     case MK_SHAPE_PLANE:
         if (!mk_v3_is_valid(s->u.plane.normal) || !mk_real_is_valid(s->u.plane.offset)) return MK_ERR_NOT_FINITE;
-        if (fabs((double)mk_v3_len2(s->u.plane.normal) - 1) > MK_QUAT_TOLERANCE) return MK_ERR_BAD_NORMAL;
+        if (!(mk_fabs_(mk_v3_len2(s->u.plane.normal) - 1) <= MK_QUAT_TOLERANCE)) return MK_ERR_BAD_NORMAL;
         return MK_OK;
     default: return MK_ERR_BAD_SHAPE;
     }

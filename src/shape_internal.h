@@ -12,6 +12,11 @@
 #  define MK_MAX_SIZE MK_REAL(1e12)
 #endif
 
+/* A size (extent, radius, half height): in (0, MK_MAX_SIZE]; a rounding
+ * radius may also be 0. NaN fails both comparisons. */
+static inline int mk_size_ok_(mk_real v) { return v > 0 && v <= MK_MAX_SIZE; }
+static inline int mk_rounding_ok_(mk_real v) { return v >= 0 && v <= MK_MAX_SIZE; }
+
 /* Support point of the core alone (no rounding radius), local frame.
  * *feature is in/out: on entry a hint (previous answer, or -1), on exit the
  * index of the core vertex returned (box corner bits zyx: bit set = +extent;
@@ -29,6 +34,37 @@ mk_vec3 mk_core_support(const mk_shape *s, mk_vec3 dir, int *feature);
 #else
 #  define MK_ALWAYS_INLINE static inline
 #endif
+/* For the rare, long branches of a hot entry point (error diagnosis, the
+ * iterative solvers), so the common path keeps a small stack frame. */
+#if defined(__GNUC__) || defined(__clang__)
+#  define MK_NOINLINE __attribute__((noinline))
+#else
+#  define MK_NOINLINE
+#endif
+
+/* 1 exactly when mk_shape_validate(s) would return MK_OK, for a shape whose
+ * type is t (the caller knows it, e.g. from a dispatch table; pass s->type
+ * otherwise): the accepting test each pair query pays, with no call and,
+ * for a constant t, no switch. mk_shape_validate names what is wrong. */
+MK_ALWAYS_INLINE int mk_shape_ok_typed_(const mk_shape *s, mk_shape_type t)
+{
+    mk_real r = s->radius;
+    switch (t) {
+    case MK_SHAPE_SPHERE: return mk_size_ok_(r);
+    case MK_SHAPE_BOX:
+        return mk_rounding_ok_(r) && mk_size_ok_(s->u.half_extents.x) && mk_size_ok_(s->u.half_extents.y) &&
+               mk_size_ok_(s->u.half_extents.z);
+    case MK_SHAPE_CAPSULE: return mk_size_ok_(r) && mk_size_ok_(s->u.capsule.half_height);
+    case MK_SHAPE_CYLINDER: return mk_rounding_ok_(r) && mk_size_ok_(s->u.cylinder.radius) && mk_size_ok_(s->u.cylinder.half_height);
+    case MK_SHAPE_CONE: return mk_rounding_ok_(r) && mk_size_ok_(s->u.cone.radius) && mk_size_ok_(s->u.cone.half_height);
+    case MK_SHAPE_HULL: return mk_rounding_ok_(r) && s->u.hull && s->u.hull->vertex_count >= 4 && s->u.hull->face_count >= 4;
+    case MK_SHAPE_PLANE: { /* the rounding radius of a plane is not used */
+        mk_vec3 n = s->u.plane.normal;
+        return mk_v3_is_valid(n) && mk_real_is_valid(s->u.plane.offset) && mk_fabs_(mk_v3_len2(n) - 1) <= MK_QUAT_TOLERANCE;
+    }
+    default: return 0;
+    }
+}
 
 static inline mk_real mk_sgn_extent_(mk_real d, mk_real h) { return d >= 0 ? h : -h; }
 

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "minko/distance.h"
+#include "shape_internal.h" /* MK_MAX_SIZE */
 #include "support/cases.h"
 #include "support/mk_test.h"
 
@@ -717,6 +718,117 @@ START_TEST(approx_distance_is_upper_bound)
 }
 END_TEST
 
+/* mk_distance's validation is a quick test on the accepting path and a
+ * diagnosis only when that test refuses; a refused query returns whatever
+ * the diagnosis says. So the two must accept exactly the same input, or a
+ * valid query would come back MK_OK with *out never written (or an invalid
+ * one be answered). Checked against the contract written out here: shapes
+ * by mk_shape_validate, then each pose (finite, then unit within
+ * MK_QUAT_TOLERANCE), for every shape type with every size field set to
+ * NaN, +-Inf, 0, negative and the MK_MAX_SIZE boundary, and poses with each
+ * component non-finite or the quaternion just inside or outside tolerance. */
+static mk_status pose_status(mk_transform x)
+{
+    if (!mk_v3_is_valid(x.p) || !mk_real_is_valid(x.q.x) || !mk_real_is_valid(x.q.y) || !mk_real_is_valid(x.q.z) ||
+        !mk_real_is_valid(x.q.w))
+        return MK_ERR_NOT_FINITE;
+    return mk_quat_is_valid(x.q) ? MK_OK : MK_ERR_BAD_ROTATION;
+}
+
+static mk_status contract_status(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb)
+{
+    mk_status st;
+    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
+    if ((st = pose_status(xa)) != MK_OK) return st;
+    return pose_status(xb);
+}
+
+static void expect_contract(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb)
+{
+    mk_status want = contract_status(a, xa, b, xb), st;
+    mk_distance_result r;
+    int ov = 7;
+    memset(&r, 0xff, sizeof r); /* NaN everywhere */
+    st = mk_distance(a, xa, b, xb, NULL, &r);
+    if (want == MK_OK && a->type == MK_SHAPE_PLANE && b->type == MK_SHAPE_PLANE) want = MK_ERR_UNSUPPORTED;
+    ck_assert_msg(st == want, "types %d, %d: mk_distance says %s, the contract %s", (int)a->type, (int)b->type, mk_status_name(st),
+                  mk_status_name(want));
+    if (st == MK_OK) ck_assert_msg(mk_real_is_valid(r.distance) && mk_v3_is_valid(r.normal), "types %d, %d: answer not written",
+                                   (int)a->type, (int)b->type);
+    else ck_assert(!(r.distance == r.distance)); /* untouched */
+    st = mk_overlap(a, xa, b, xb, NULL, &ov);
+    ck_assert_msg(st == want, "types %d, %d: mk_overlap says %s, the contract %s", (int)a->type, (int)b->type, mk_status_name(st),
+                  mk_status_name(want));
+    ck_assert(st == MK_OK ? (ov == 0 || ov == 1) : ov == 7);
+}
+
+START_TEST(quick_test_matches_diagnosis)
+{
+    static const mk_vec3 cube[8] = {{-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {-1, 1, 1}, {1, 1, 1}};
+    const mk_real big = MK_MAX_SIZE, inf = (mk_real)INFINITY, nan = (mk_real)NAN;
+    const mk_real bad[] = {nan, inf, -inf, 0, -1, big, 2 * big, MK_REAL(0.5)};
+    mk_hull *hull = NULL, fake;
+    mk_shape good[MK_SHAPE_TYPE_COUNT];
+    mk_rng rng = {11};
+    mk_transform xa = xfq(mk_v3(0.1, 0.2, 0.3), mk_rng_quat(&rng)), xb = xfq(mk_v3(2, 0.5, -0.25), mk_rng_quat(&rng));
+    int t, u, f, k, c;
+    MK_ASSERT_STATUS(mk_hull_create(cube, 8, NULL, &hull), MK_OK);
+    MK_ASSERT_STATUS(mk_shape_sphere(0.5, &good[MK_SHAPE_SPHERE]), MK_OK);
+    MK_ASSERT_STATUS(mk_shape_box(mk_v3(1, 0.5, 0.25), 0.1, &good[MK_SHAPE_BOX]), MK_OK);
+    MK_ASSERT_STATUS(mk_shape_capsule(0.25, 1, &good[MK_SHAPE_CAPSULE]), MK_OK);
+    MK_ASSERT_STATUS(mk_shape_cylinder(0.5, 1, 0, &good[MK_SHAPE_CYLINDER]), MK_OK);
+    MK_ASSERT_STATUS(mk_shape_cone(0.5, 1, 0.05, &good[MK_SHAPE_CONE]), MK_OK);
+    MK_ASSERT_STATUS(mk_shape_hull(hull, 0, &good[MK_SHAPE_HULL]), MK_OK);
+    MK_ASSERT_STATUS(mk_shape_plane(mk_v3(0, 0, 1), -3, &good[MK_SHAPE_PLANE]), MK_OK);
+    for (t = 0; t < MK_SHAPE_TYPE_COUNT; ++t) {
+        for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) expect_contract(&good[t], xa, &good[u], xb);
+        /* Every real of the shape (rounding radius, then the union's reals) set to each bad value. */
+        for (f = 0; f < 5; ++f) {
+            for (k = 0; k < (int)(sizeof bad / sizeof bad[0]); ++k) {
+                mk_shape s = good[t];
+                mk_real *field = f == 0 ? &s.radius : &s.u.half_extents.x + (f - 1);
+                if (t == MK_SHAPE_HULL && f > 0) break; /* the union holds a pointer */
+                if (f == 4 && t != MK_SHAPE_PLANE) break;  /* only a plane has a fourth real */
+                *field = bad[k];
+                for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) {
+                    expect_contract(&s, xa, &good[u], xb);
+                    expect_contract(&good[u], xa, &s, xb);
+                }
+            }
+        }
+    }
+    /* Shapes of unknown type, hulls that are NULL or degenerate. */
+    {
+        mk_shape s = good[MK_SHAPE_SPHERE];
+        s.type = (mk_shape_type)99;
+        for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) expect_contract(&s, xa, &good[u], xb), expect_contract(&good[u], xa, &s, xb);
+        s = good[MK_SHAPE_HULL];
+        s.u.hull = NULL;
+        for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) expect_contract(&s, xa, &good[u], xb), expect_contract(&good[u], xa, &s, xb);
+        fake = *hull;
+        fake.vertex_count = 3;
+        s.u.hull = &fake;
+        for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) expect_contract(&s, xa, &good[u], xb), expect_contract(&good[u], xa, &s, xb);
+    }
+    /* Each pose component non-finite; quaternions just inside and outside the tolerance, or overflowing |q|^2. */
+    for (c = 0; c < 7 + 5; ++c) {
+        for (k = 0; k < 3; ++k) {
+            mk_transform x = xa;
+            mk_real *comp = c < 3 ? &x.p.x + c : &x.q.x + (c - 3);
+            if (c < 7) *comp = bad[k];
+            else if (c < 11) {
+                mk_real g = mk_sqrt_(1 + (c - 7 < 2 ? MK_REAL(0.9) : MK_REAL(1.1)) * (c % 2 ? -1 : 1) * MK_QUAT_TOLERANCE);
+                x.q = mk_quat_make(x.q.x * g, x.q.y * g, x.q.z * g, x.q.w * g);
+            } else
+                x.q = mk_quat_make(0, 0, MK_REAL_MAX / 2, 1);
+            for (t = 0; t < MK_SHAPE_TYPE_COUNT; ++t)
+                for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) expect_contract(&good[t], x, &good[u], xb), expect_contract(&good[t], xb, &good[u], x);
+        }
+    }
+    mk_hull_destroy(hull);
+}
+END_TEST
+
 static Suite *distance_suite(void)
 {
     Suite *s = suite_create("distance");
@@ -729,6 +841,7 @@ static Suite *distance_suite(void)
     tcase_add_test(tc, capsule_analytic);
     tcase_add_test(tc, shapes_against_plane);
     tcase_add_test(tc, bad_input_statuses);
+    tcase_add_test(tc, quick_test_matches_diagnosis);
     tcase_add_test(tc, dispatch_reports_method);
     tcase_add_test(tb, box_box_against_oracle);
     tcase_add_test(tb, box_corner_at_box_edge);

@@ -40,7 +40,14 @@
  * external definition of each, so the functions are also real exported
  * symbols (for FFI and for -O0 builds). In C++ `inline` has the matching
  * meaning. */
-#define MK_INLINE inline
+#if defined(MK_BUILDING) && (defined(__GNUC__) || defined(__clang__))
+/* Inside the library the math is always inlined: GCC's size heuristics
+ * otherwise call some of it out of line in the larger query functions, and
+ * such a call passes every mk_vec3 and mk_mat3 argument through memory. */
+#  define MK_INLINE inline __attribute__((always_inline))
+#else
+#  define MK_INLINE inline
+#endif
 
 #ifdef __cplusplus
 extern "C" {
