@@ -231,12 +231,12 @@ void mk_pairs_full_begin_(mk_bp *bp)
     bp->pairs.full_count = 0;
 }
 
-mk_status mk_pairs_full_add_(mk_bp *bp, uint32_t a, uint32_t b)
+static mk_bp_pair pair_of(const mk_bp *bp, uint64_t key);
+static int pair_less(mk_bp_pair x, mk_bp_pair y);
+
+static mk_status push_key(mk_bp *bp, uint64_t key)
 {
     mk_pair_table *t = &bp->pairs;
-    uint64_t key = mk_pair_key_(a, b);
-    mk_pair_entry *e = find(t, key);
-    if (!(e && (e->state & MK_PS_LIVE) && !refiltered(bp, a, b)) && !mk_bp_filter_pass_(bp, a, b)) return MK_OK;
     if (t->full_count == t->cap) {
         mk_status st;
         if (bp->def.fixed_capacity) return MK_ERR_CAPACITY;
@@ -247,8 +247,44 @@ mk_status mk_pairs_full_add_(mk_bp *bp, uint32_t a, uint32_t b)
     return MK_OK;
 }
 
-static mk_bp_pair pair_of(const mk_bp *bp, uint64_t key);
-static int pair_less(mk_bp_pair x, mk_bp_pair y);
+mk_status mk_pairs_full_add_(mk_bp *bp, uint32_t a, uint32_t b)
+{
+    uint64_t key = mk_pair_key_(a, b);
+    mk_pair_entry *e = find(&bp->pairs, key);
+    if (!(e && (e->state & MK_PS_LIVE) && !refiltered(bp, a, b)) && !mk_bp_filter_pass_(bp, a, b)) return MK_OK;
+    return push_key(bp, key);
+}
+
+/* The set alone: the table is emptied (once, when a run of such updates
+ * starts) and the keys collected are the new set, with no events. */
+void mk_pairs_set_begin_(mk_bp *bp)
+{
+    mk_pair_table *t = &bp->pairs;
+    if (t->count) {
+        t->count = 0;
+        memset(t->index, 0xff, (size_t)(t->index_mask + 1) * sizeof *t->index);
+    }
+    t->touched_count = 0;
+    t->full = 1;
+    t->full_count = 0;
+}
+
+mk_status mk_pairs_set_add_(mk_bp *bp, uint32_t a, uint32_t b)
+{
+    if (!mk_bp_filter_pass_(bp, a, b)) return MK_OK;
+    return push_key(bp, mk_pair_key_(a, b));
+}
+
+void mk_pairs_set_end_(mk_bp *bp)
+{
+    mk_pair_table *t = &bp->pairs;
+    int i, n = t->full_count;
+    mk_sort_u64_(t->scratch, t->scratch2, n);
+    for (i = 0; i < n; ++i) t->set[i] = pair_of(bp, t->scratch[i]);
+    t->set_count = n;
+    t->added_count = t->removed_count = 0;
+    t->full = 2; /* mk_pairs_finish_ has nothing to add */
+}
 
 /* keys[0, n) sorted: the new set. Events are its difference from the old set. */
 static void diff_against_set(mk_bp *bp, const uint64_t *keys, int n)
@@ -314,14 +350,16 @@ static void finish_forgotten(mk_bp *bp)
     for (i = 0; i < nd; ++i) erase(t, t->scratch2[i]);
 }
 
-void mk_sort_u64_(uint64_t *keys, uint64_t *tmp, int n)
+void mk_sort_u64_(uint64_t *keys, uint64_t *tmp, int n) { mk_sort_u64_by_(keys, tmp, n, 0); }
+
+void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte)
 {
     /* LSD radix sort on bytes, skipping bytes that are equal in every key
-     * (slot numbers use few bits, so most passes are skipped). */
+     * (slot numbers use few bits, so most passes are skipped). Stable. */
     uint64_t all_or = 0, all_and = ~(uint64_t)0, *src = keys, *dst = tmp, *sw;
     int shift, i;
     for (i = 0; i < n; ++i) { all_or |= keys[i]; all_and &= keys[i]; }
-    for (shift = 0; shift < 64; shift += 8) {
+    for (shift = 8 * from_byte; shift < 64; shift += 8) {
         size_t count[256], sum = 0;
         int d;
         if ((((all_or ^ all_and) >> shift) & 0xff) == 0) continue;

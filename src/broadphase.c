@@ -102,6 +102,7 @@ void mk_bp_destroy(mk_bp *bp)
     mk_allocator al;
     if (!bp) return;
     destroy_structures(bp);
+    mk_sweep_destroy_(bp);
     mk_pairs_fini_(bp);
     n = proxy_arrays(bp, a);
     for (i = 0; i < n; ++i) mk_bp_free_(bp, *a[i].p, a[i].elem * (size_t)bp->cap);
@@ -162,6 +163,12 @@ static inline mk_status check_box(const mk_aabb *b)
              (b->lo.x <= MK_REAL_MAX) & (b->lo.y <= MK_REAL_MAX) & (b->lo.z <= MK_REAL_MAX) &
              (b->hi.x >= -MK_REAL_MAX) & (b->hi.y >= -MK_REAL_MAX) & (b->hi.z >= -MK_REAL_MAX);
     return ok ? MK_OK : MK_ERR_BAD_AABB;
+}
+
+static inline int same_box(const mk_aabb *a, const mk_aabb *b)
+{
+    return (a->lo.x == b->lo.x) & (a->lo.y == b->lo.y) & (a->lo.z == b->lo.z) & (a->hi.x == b->hi.x) &
+           (a->hi.y == b->hi.y) & (a->hi.z == b->hi.z);
 }
 
 /* The slot of a live, not destroyed id, or -1. */
@@ -227,6 +234,7 @@ mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box)
     if (!bp) return MK_ERR_NULL;
     if ((s = slot_of(bp, id)) < 0) return MK_ERR_UNKNOWN_ID;
     if ((st = check_box(&box)) != MK_OK) return st;
+    if (same_box(&bp->next[s], &box)) return MK_OK; /* a resting body is not a mover */
     bp->next[s] = box;
     if (bp->flags[s] & MK_PF_NEW) bp->box[s] = box;
     else mark_dirty(bp, (uint32_t)s, MK_PF_MOVED);
@@ -366,10 +374,13 @@ static void retire_dirty(mk_bp *bp)
 mk_status mk_bp_update(mk_bp *bp)
 {
     mk_status st;
+    int rebuild, sweeps;
     if (!bp) return MK_ERR_NULL;
     auto_choose(bp);
-    if (bp->rebuild) bp->full_rebuilds++;
+    rebuild = bp->rebuild;
+    sweeps = bp->sweeps;
     st = run_structure(bp);
+    if (rebuild && sweeps == bp->sweeps) bp->full_rebuilds++;
     if (st != MK_OK) {
         /* Whatever was missed is recounted next time; the pairs of destroyed
          * proxies go now, since their slots are about to be reused. */
@@ -387,15 +398,16 @@ const mk_bp_pair *mk_bp_pairs(const mk_bp *bp, int *count)
     return bp ? bp->pairs.set : NULL;
 }
 
+/* pairs_only: no events, even after updates that made them internally. */
 const mk_bp_pair *mk_bp_added(const mk_bp *bp, int *count)
 {
-    if (count) *count = bp ? bp->pairs.added_count : 0;
+    if (count) *count = bp && !bp->def.pairs_only ? bp->pairs.added_count : 0;
     return bp ? bp->pairs.added : NULL;
 }
 
 const mk_bp_pair *mk_bp_removed(const mk_bp *bp, int *count)
 {
-    if (count) *count = bp ? bp->pairs.removed_count : 0;
+    if (count) *count = bp && !bp->def.pairs_only ? bp->pairs.removed_count : 0;
     return bp ? bp->pairs.removed : NULL;
 }
 
@@ -504,9 +516,10 @@ mk_status mk_bp_get_stats(const mk_bp *bp, mk_bp_stats *out)
     out->static_proxies = bp->statics;
     out->pairs = bp->pairs.set_count;
     out->candidates = bp->pairs.count;
-    out->added = bp->pairs.added_count;
-    out->removed = bp->pairs.removed_count;
+    mk_bp_added(bp, &out->added);
+    mk_bp_removed(bp, &out->removed);
     out->full_rebuilds = bp->full_rebuilds;
+    out->sweeps = bp->sweeps;
     out->switches = bp->switches;
     out->bytes = bp->bytes + sizeof *bp;
 #if !defined(MK_WITHOUT_SAP)

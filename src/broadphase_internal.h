@@ -54,6 +54,7 @@ typedef struct mk_pair_table {
 
 struct mk_sap;
 struct mk_hgrid;
+struct mk_sweep;
 
 struct mk_bp {
     mk_allocator alloc;
@@ -74,10 +75,12 @@ struct mk_bp {
     mk_status broken;         /* a failed update: rebuild the structure next time */
     int rebuild;              /* the structure must be rebuilt from scratch */
     int switches, full_rebuilds;
+    int sweeps;               /* updates answered by the stateless sweep */
     int frames_since_choice;
     double moved_share, far_share;  /* AUTO: smoothed motion statistics */
     struct mk_sap *sap;
     struct mk_hgrid *grid;
+    struct mk_sweep *sweep;   /* scratch of mk_sweep_pairs_, made on first use */
 };
 
 /* ---- memory (the caller's allocator; NULL means malloc) ---- */
@@ -119,6 +122,11 @@ void mk_pairs_drop_flagged_(mk_bp *bp, uint8_t flags);
 void mk_pairs_full_begin_(mk_bp *bp);
 mk_status mk_pairs_full_add_(mk_bp *bp, uint32_t a, uint32_t b);
 void mk_pairs_full_end_(mk_bp *bp);
+/* The set alone, without events or entries (pairs_only's stateless updates):
+ * begin, add every overlapping pair once (the filter runs on each), end. */
+void mk_pairs_set_begin_(mk_bp *bp);
+mk_status mk_pairs_set_add_(mk_bp *bp, uint32_t a, uint32_t b);
+void mk_pairs_set_end_(mk_bp *bp);
 /* Empties the table but keeps the set the caller last saw: the next finish
  * diffs the live entries against it as a whole (the grid's rebuild). */
 void mk_pairs_forget_(mk_bp *bp);
@@ -129,6 +137,15 @@ void mk_pairs_touch_(mk_bp *bp, mk_pair_entry *e);
 mk_status mk_pairs_finish_(mk_bp *bp);
 /* Sort n keys ascending (LSD radix); tmp has room for n. */
 void mk_sort_u64_(uint64_t *keys, uint64_t *tmp, int n);
+/* The same on the bytes from from_byte up only; ties keep their order. */
+void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte);
+
+/* ---- stateless sort and sweep (bp_sweep.c) ---- */
+/* Reports every overlapping pair of live proxies (no static-static pair)
+ * once, in no set order, from the boxes in box[]; allocates its scratch on
+ * first use. O(n) + one radix sort + the boxes met in the sweep. */
+mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b));
+void mk_sweep_destroy_(mk_bp *bp);
 
 /* ---- structures ---- */
 mk_status mk_brute_update_(mk_bp *bp);

@@ -8,7 +8,8 @@
  * pair (added if the boxes now overlap on all axes), a max passing a min
  * leftwards ends one. Swaps are counted: when they exceed the cost of sorting
  * from scratch (crowded axes, teleports), the update stops and rebuilds with
- * full sorts and one sweep along the axis of largest spread. Inserted proxies
+ * full sorts and one stateless sweep (bp_sweep.c) for the pairs; a pairs_only
+ * caller gets the sweep's set alone, without a rebuild. Inserted proxies
  * are merged in as a sorted batch and paired by one sweep; removed ones are
  * compacted out in one pass. */
 #include <string.h>
@@ -30,6 +31,8 @@ struct mk_sap {
     uint32_t *active[2], *active_pos; /* sweep: [0] dynamic, [1] static */
     int active_count[2];
     long long swaps;        /* last update */
+    int sweep_wait;         /* pairs_only: stateless updates left before insertion sorts are tried again */
+    int sweep_backoff;      /* pairs_only: the next wait, doubled each time they fail */
     mk_real maxw;           /* >= every finite x width among proxies with finite lo.x */
 };
 
@@ -137,26 +140,6 @@ static void put_endpoints(const mk_bp *bp, mk_ep *out, uint32_t slot, int axis)
 
 /* ---- full rebuild: sort everything, sweep the axis of largest spread ---- */
 
-static int best_axis(const mk_bp *bp)
-{
-    double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0}, var[3];
-    int n[3] = {0, 0, 0}, k, best = 0;
-    uint32_t i;
-    for (i = 0; i < (uint32_t)bp->hi_slot; ++i) {
-        mk_vec3 c;
-        if (!in_structure(bp, i)) continue;
-        c = mk_aabb_center(bp->box[i]);
-        for (k = 0; k < 3; ++k) {
-            double v = (double)(&c.x)[k];
-            if (!mk_real_is_valid((mk_real)v)) continue; /* infinite boxes say nothing about spread */
-            sum[k] += v; sum2[k] += v * v; n[k]++;
-        }
-    }
-    for (k = 0; k < 3; ++k) var[k] = n[k] ? sum2[k] / n[k] - (sum[k] / n[k]) * (sum[k] / n[k]) : 0;
-    for (k = 1; k < 3; ++k) if (var[k] > var[best]) best = k;
-    return best;
-}
-
 static void active_add(struct mk_sap *s, int list, uint32_t slot)
 {
     s->active_pos[slot] = (uint32_t)s->active_count[list];
@@ -201,8 +184,6 @@ static mk_status sweep(mk_bp *bp, int axis, needs_fn needs, mk_status (*report)(
     return MK_OK;
 }
 
-static int needs_all(const mk_bp *bp, uint32_t slot) { (void)bp; (void)slot; return 1; }
-
 static mk_status rebuild(mk_bp *bp)
 {
     struct mk_sap *s = bp->sap;
@@ -227,9 +208,23 @@ static mk_status rebuild(mk_bp *bp)
         fix_pos(s, axis, 0);
     }
     mk_pairs_full_begin_(bp);
-    if ((st = sweep(bp, best_axis(bp), needs_all, mk_pairs_full_add_)) != MK_OK) { bp->pairs.full = 0; return st; }
+    if ((st = mk_sweep_pairs_(bp, mk_pairs_full_add_)) != MK_OK) { bp->pairs.full = 0; return st; }
     mk_pairs_full_end_(bp);
     bp->rebuild = 0;
+    return MK_OK;
+}
+
+/* pairs_only: the set straight from a stateless sweep. The endpoint arrays
+ * and the pair table are left stale (bp->rebuild), so the next update that
+ * goes back to insertion sorts starts with a rebuild. */
+static mk_status sweep_set(mk_bp *bp)
+{
+    mk_status st;
+    mk_pairs_set_begin_(bp);
+    if ((st = mk_sweep_pairs_(bp, mk_pairs_set_add_)) != MK_OK) { bp->pairs.full = 0; return st; }
+    mk_pairs_set_end_(bp);
+    bp->rebuild = 1;
+    bp->sweeps++;
     return MK_OK;
 }
 
@@ -366,12 +361,32 @@ static void write_moved(mk_bp *bp)
 }
 
 /* Sorting from scratch costs about n log n moves per axis plus a sweep;
- * past that many swaps, insertion sort has lost. */
-static long long swap_budget(const struct mk_sap *s)
+ * past that many swaps, insertion sort has lost. With pairs_only the
+ * alternative is a stateless sweep, a few passes over the boxes: a few
+ * swaps per endpoint are its price. */
+static long long swap_budget(const mk_bp *bp)
 {
-    long long n = s->count, lg = 1;
+    long long n = bp->sap->count, lg = 1;
+    if (bp->def.pairs_only) return 4 * n + 1024;
     while ((1LL << lg) < n) ++lg;
     return 3 * n * lg + 1024;
+}
+
+#define MK_SAP_MAX_WAIT_ 64
+
+/* Insertion sorts lost to incoherent motion: with pairs_only, answer by
+ * stateless sweeps for a while (longer after each loss), else rebuild. */
+static mk_status lost_coherence(mk_bp *bp)
+{
+    struct mk_sap *s = bp->sap;
+    if (!bp->def.pairs_only) {
+        bp->full_rebuilds++;
+        return rebuild(bp);
+    }
+    if (s->sweep_backoff < 4) s->sweep_backoff = 4;
+    s->sweep_wait = s->sweep_backoff;
+    if (s->sweep_backoff < MK_SAP_MAX_WAIT_) s->sweep_backoff *= 2;
+    return sweep_set(bp);
 }
 
 mk_status mk_sap_update_(mk_bp *bp)
@@ -383,6 +398,10 @@ mk_status mk_sap_update_(mk_bp *bp)
     s = bp->sap;
     s->swaps = 0;
     mk_bp_commit_(bp);
+    if (bp->rebuild && bp->def.pairs_only && s->sweep_wait > 0) {
+        s->sweep_wait--;
+        return sweep_set(bp);
+    }
     if (bp->rebuild) return rebuild(bp);
     for (r = 0; r < bp->dirty_count; ++r) {
         uint32_t slot = bp->dirty[r];
@@ -392,15 +411,13 @@ mk_status mk_sap_update_(mk_bp *bp)
     remove_leaving(bp, n_leaving);
     for (r = 0; r < bp->dirty_count; ++r) n_entering += entering(bp, bp->dirty[r]);
     if (n_moved) {
-        long long budget = swap_budget(s);
+        long long budget = swap_budget(bp);
         write_moved(bp);
         for (axis = 0; axis < 3; ++axis) {
-            if (sift_axis(bp, axis, budget, &st)) {
-                bp->full_rebuilds++;
-                return rebuild(bp);
-            }
+            if (sift_axis(bp, axis, budget, &st)) return lost_coherence(bp);
             if (st != MK_OK) return st;
         }
+        if (s->sweep_backoff > 4) s->sweep_backoff /= 2; /* coherent again */
     }
     return insert_entering(bp, n_entering);
 }

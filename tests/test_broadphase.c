@@ -8,8 +8,14 @@
 #include "support/mk_test.h"
 
 #define MAXN 600
-#define NKIND 4
-static const mk_bp_kind kinds[NKIND] = {MK_BP_BRUTE, MK_BP_SAP, MK_BP_HGRID, MK_BP_AUTO};
+#define NKIND 5
+/* The last one is SAP for a caller that wants the set only (pairs_only):
+ * incoherent frames are answered by a stateless sweep, without events. */
+static const mk_bp_kind kinds[NKIND] = {MK_BP_BRUTE, MK_BP_SAP, MK_BP_HGRID, MK_BP_AUTO, MK_BP_SAP};
+static const int only_pairs[NKIND] = {0, 0, 0, 0, 1};
+#define K_SAP_SET 4
+
+static const char *name_of(int k) { return only_pairs[k] ? "sap pairs_only" : name_of(k); }
 
 typedef struct obj { int alive, is_static; mk_aabb box; mk_vec3 vel; mk_bp_id id[NKIND]; } obj;
 
@@ -48,6 +54,7 @@ static int world_init(world *w, uint64_t seed, int cap, int filter)
         mk_bp_def d = mk_bp_default_def();
         mk_status st;
         d.kind = kinds[k];
+        d.pairs_only = only_pairs[k];
         d.proxy_capacity = cap;
         if (filter) { d.filter = test_filter; }
         st = mk_bp_create(&d, NULL, &w->bp[k]);
@@ -128,22 +135,23 @@ static void check_kind(world *w, int k, const mk_bp_pair *truth, int nt, int fra
     int np, na, nr, i, r = 0, a = 0, o = 0, p = 0;
     const mk_bp_pair *set = mk_bp_pairs(w->bp[k], &np), *add = mk_bp_added(w->bp[k], &na), *rem = mk_bp_removed(w->bp[k], &nr);
     ck_assert_msg(sorted_strictly(set, np) && sorted_strictly(add, na) && sorted_strictly(rem, nr),
-                  "%s: unsorted output at frame %d", mk_bp_kind_name(kinds[k]), frame);
+                  "%s: unsorted output at frame %d", name_of(k), frame);
+    if (only_pairs[k]) ck_assert_msg(na == 0 && nr == 0, "%s: events at frame %d", name_of(k), frame);
     /* replay: prev - removed + added == set */
-    while (p < w->prev_count[k] || a < na) {
+    while (!only_pairs[k] && (p < w->prev_count[k] || a < na)) {
         if (p < w->prev_count[k] && r < nr && pair_cmp(&w->prev[k][p], &rem[r]) == 0) { ++p; ++r; continue; }
         if (a >= na || (p < w->prev_count[k] && pair_cmp(&w->prev[k][p], &add[a]) < 0)) replay[o++] = w->prev[k][p++];
         else replay[o++] = add[a++];
     }
-    ck_assert_msg(r == nr, "%s: removed a pair that was not there (frame %d)", mk_bp_kind_name(kinds[k]), frame);
-    ck_assert_msg(o == np && memcmp(replay, set, sizeof *set * (size_t)np) == 0, "%s: events do not replay (frame %d)",
-                  mk_bp_kind_name(kinds[k]), frame);
+    ck_assert_msg(r == nr, "%s: removed a pair that was not there (frame %d)", name_of(k), frame);
+    ck_assert_msg(only_pairs[k] || (o == np && memcmp(replay, set, sizeof *set * (size_t)np) == 0), "%s: events do not replay (frame %d)",
+                  name_of(k), frame);
     memcpy(w->prev[k], set, sizeof *set * (size_t)np);
     w->prev_count[k] = np;
     /* map ids to object indices and compare with the truth */
     for (i = 0; i < np; ++i) {
         long ia = (long)(intptr_t)mk_bp_user(w->bp[k], set[i].a) - 1, ib = (long)(intptr_t)mk_bp_user(w->bp[k], set[i].b) - 1;
-        ck_assert_msg(ia >= 0 && ib >= 0, "%s: pair with a dead id (frame %d)", mk_bp_kind_name(kinds[k]), frame);
+        ck_assert_msg(ia >= 0 && ib >= 0, "%s: pair with a dead id (frame %d)", name_of(k), frame);
         buf[i].a = (mk_bp_id)(ia < ib ? ia : ib);
         buf[i].b = (mk_bp_id)(ia < ib ? ib : ia);
     }
@@ -155,7 +163,7 @@ static void check_kind(world *w, int k, const mk_bp_pair *truth, int nt, int fra
             else if (x >= nt || pair_cmp(&buf[y], &truth[x]) < 0) { ++extra; ++y; }
             else { ++x; ++y; }
         }
-        ck_abort_msg("%s: frame %d: %d pairs, truth %d: %d missing, %d extra", mk_bp_kind_name(kinds[k]), frame, np, nt, missing, extra);
+        ck_abort_msg("%s: frame %d: %d pairs, truth %d: %d missing, %d extra", name_of(k), frame, np, nt, missing, extra);
     }
 }
 
@@ -223,8 +231,56 @@ static void run_motion(uint64_t seed, int n, double world_size, double size_lo, 
         if (teleport_share == 0) ck_assert_int_eq(st.full_rebuilds, 1);
         if (teleport_share >= 0.1) ck_assert_int_gt(st.full_rebuilds, 1);
     }
+    if (w.bp[K_SAP_SET] && teleport_share >= 0.1) { /* teleports: answered by stateless sweeps */
+        mk_bp_stats st;
+        MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[K_SAP_SET], &st), MK_OK);
+        ck_assert_int_gt(st.sweeps, 0);
+    }
     world_fini(&w);
 }
+
+/* pairs_only: bursts of teleports (stateless sweeps) between calm stretches
+ * (insertion sorts again), with churn, statics and a ground plane; the set
+ * must be exact on every frame, whichever path answered it. */
+START_TEST(pairs_only_switches_paths)
+{
+    static world w;
+    const mk_real inf = (mk_real)INFINITY;
+    int i, f, sweeps_seen = 0, back_to_sorts = 0;
+    mk_bp_stats st;
+    if (!world_init(&w, 31, MAXN, 0)) return;
+    add_obj(&w, mk_aabb_make(mk_v3(-inf, -inf, -inf), mk_v3(inf, inf, (mk_real)0.5)), 1);
+    for (i = 0; i < 320; ++i) {
+        add_obj(&w, random_box(&w.rng, 14, 0.5, 2), i % 6 == 0);
+        w.o[w.n - 1].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)0.05);
+    }
+    for (f = 0; f < 240; ++f) {
+        int burst = (f / 20) % 3 == 1;
+        int sweeps_before, rebuilds_before;
+        MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[K_SAP_SET], &st), MK_OK);
+        sweeps_before = st.sweeps;
+        rebuilds_before = st.full_rebuilds;
+        for (i = 1; i < w.n; ++i) {
+            if (!w.o[i].alive || w.o[i].is_static) continue;
+            if (burst && mk_rng_unit(&w.rng) < 0.5) move_obj(&w, i, box_at(mk_rng_v3(&w.rng, 0, 14), mk_aabb_extents(w.o[i].box)));
+            else drift(&w, i, 1);
+        }
+        if (f % 7 == 3) {
+            for (i = 1; i < w.n; ++i)
+                if (w.o[i].alive && mk_rng_unit(&w.rng) < 0.02) kill_obj(&w, i);
+            while (w.n < MAXN && mk_rng_unit(&w.rng) < 0.8) add_obj(&w, random_box(&w.rng, 14, 0.5, 2), 0);
+        }
+        step(&w, f);
+        MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[K_SAP_SET], &st), MK_OK);
+        sweeps_seen += st.sweeps > sweeps_before;
+        back_to_sorts += st.full_rebuilds > rebuilds_before && sweeps_seen > 0;
+    }
+    ck_assert_int_gt(sweeps_seen, 10);
+    ck_assert_int_gt(back_to_sorts, 0);
+    ck_assert_int_lt(sweeps_seen, 240);
+    world_fini(&w);
+}
+END_TEST
 
 START_TEST(coherent_motion) { run_motion(1, 300, 12, 1, 2, 0, 0, 0, 200); }
 END_TEST
@@ -371,6 +427,7 @@ START_TEST(filter_modes)
             int n;
             mk_aabb box = mk_aabb_make(mk_v3(0, 0, 0), mk_v3(1, 1, 1));
             d.kind = kinds[k];
+            d.pairs_only = only_pairs[k];
             d.filter_mode = (mk_bp_filter_mode)mode;
             if (mk_bp_create(&d, NULL, &bp) == MK_ERR_UNSUPPORTED) continue;
             /* a: cat 1 mask 2; b: cat 2 mask 0; c: cat 2 mask 1 */
@@ -390,7 +447,7 @@ START_TEST(filter_modes)
             mk_bp_pairs(bp, &n);
             ck_assert_int_eq(n, 0);
             mk_bp_removed(bp, &n);
-            ck_assert_int_eq(n, 2);
+            ck_assert_int_eq(n, only_pairs[k] ? 0 : 2);
             (void)c;
             mk_bp_destroy(bp);
         }
@@ -466,12 +523,12 @@ START_TEST(region_and_ray_queries)
                 MK_ASSERT_STATUS(mk_bp_query_aabb(w.bp[k], box, on_hit, &h), MK_OK);
                 qsort(h.seen, (size_t)h.n, sizeof(int), int_cmp);
                 ck_assert_msg(h.n == nw && memcmp(h.seen, want, sizeof(int) * (size_t)nw) == 0,
-                              "%s: region query %d found %d, truth %d", mk_bp_kind_name(kinds[k]), q, h.n, nw);
+                              "%s: region query %d found %d, truth %d", name_of(k), q, h.n, nw);
                 rh.n = 0;
                 MK_ASSERT_STATUS(mk_bp_raycast(w.bp[k], &ray, on_ray, &rh), MK_OK);
                 for (i = 0; i < rh.n; ++i) {
                     double t = ray_entry(ray.from, ray.to, w.o[rh.seen[i]].box);
-                    ck_assert_msg(t >= 0, "%s: ray reported a box it misses", mk_bp_kind_name(kinds[k]));
+                    ck_assert_msg(t >= 0, "%s: ray reported a box it misses", name_of(k));
                     MK_ASSERT_NEAR(rh.t[i], t, 1e-5 * (1 + fabs(t)));
                 }
                 {   /* every box the exact test hits must be reported */
@@ -480,7 +537,7 @@ START_TEST(region_and_ray_queries)
                         if (!w.o[i].alive || ray_entry(ray.from, ray.to, w.o[i].box) < 0) continue;
                         ++hit;
                         for (j = 0; j < rh.n && rh.seen[j] != i; ++j) {}
-                        ck_assert_msg(j < rh.n, "%s: ray missed object %d", mk_bp_kind_name(kinds[k]), i);
+                        ck_assert_msg(j < rh.n, "%s: ray missed object %d", name_of(k), i);
                     }
                     ck_assert_int_eq(hit, rh.n);
                 }
@@ -531,7 +588,7 @@ static void run_statics(uint64_t seed, double apart, int fast_every)
                 MK_ASSERT_STATUS(mk_bp_query_aabb(w.bp[k], box, on_hit, &h), MK_OK);
                 qsort(h.seen, (size_t)h.n, sizeof(int), int_cmp);
                 ck_assert_msg(h.n == nw && memcmp(h.seen, want, sizeof(int) * (size_t)nw) == 0,
-                              "%s: region query found %d, truth %d (frame %d)", mk_bp_kind_name(kinds[k]), h.n, nw, f);
+                              "%s: region query found %d, truth %d (frame %d)", name_of(k), h.n, nw, f);
             }
         }
     }
@@ -569,6 +626,7 @@ START_TEST(swept_box_and_clipping)
         mk_bp_ray ray;
         int calls = 0, x;
         d.kind = kinds[k];
+        d.pairs_only = only_pairs[k];
         if (mk_bp_create(&d, NULL, &bp) == MK_ERR_UNSUPPORTED) continue;
         for (x = 0; x < 10; ++x)
             MK_ASSERT_STATUS(mk_bp_create_proxy(bp, mk_aabb_make(mk_v3((mk_real)(10 * x + 5), 2, -1), mk_v3((mk_real)(10 * x + 6), 3, 1)), NULL, 1, 1, 1, &id), MK_OK);
@@ -606,6 +664,7 @@ START_TEST(steady_state_does_not_allocate)
         long before;
         al.alloc = c_alloc; al.free = c_free; al.ctx = &c;
         d.kind = kinds[k];
+        d.pairs_only = only_pairs[k];
         d.proxy_capacity = 200;
         d.pair_capacity = 16; /* deliberately small: the pair set must grow */
         if (mk_bp_create(&d, &al, &bp) == MK_ERR_UNSUPPORTED) continue;
@@ -621,7 +680,7 @@ START_TEST(steady_state_does_not_allocate)
             }
             MK_ASSERT_STATUS(mk_bp_update(bp), MK_OK);
         }
-        ck_assert_msg(c.allocs == before, "%s allocated %ld times in the steady state", mk_bp_kind_name(kinds[k]), c.allocs - before);
+        ck_assert_msg(c.allocs == before, "%s allocated %ld times in the steady state", name_of(k), c.allocs - before);
         mk_bp_destroy(bp);
         ck_assert_int_eq((int)c.live, 0);
         ck_assert_int_eq((int)c.allocs, (int)c.frees);
@@ -638,6 +697,7 @@ START_TEST(fixed_capacity_overflow_recovers)
         mk_bp_id ids[40], extra;
         int i, n;
         d.kind = kinds[k];
+        d.pairs_only = only_pairs[k];
         d.proxy_capacity = 40;
         d.pair_capacity = 20;
         d.fixed_capacity = 1;
@@ -653,7 +713,7 @@ START_TEST(fixed_capacity_overflow_recovers)
             mk_real x = (mk_real)(10 * i);
             MK_ASSERT_STATUS(mk_bp_move_proxy(bp, ids[i], mk_aabb_make(mk_v3(x, 0, 0), mk_v3(x + 1, 1, 1))), MK_OK);
         }
-        ck_assert_msg(mk_bp_update(bp) == MK_OK, "%s did not recover", mk_bp_kind_name(kinds[k]));
+        ck_assert_msg(mk_bp_update(bp) == MK_OK, "%s did not recover", name_of(k));
         mk_bp_pairs(bp, &n);
         ck_assert_int_eq(n, 15);
         MK_ASSERT_STATUS(mk_bp_update(bp), MK_OK);
@@ -686,6 +746,7 @@ START_TEST(bad_input)
     for (k = 0; k < NKIND; ++k) {
         d = mk_bp_default_def();
         d.kind = kinds[k];
+        d.pairs_only = only_pairs[k];
         d.proxy_capacity = 2;
         if (mk_bp_create(&d, NULL, &bp) == MK_ERR_UNSUPPORTED) continue;
         bad = ok; bad.lo.y = nan;
@@ -772,6 +833,7 @@ static Suite *broadphase_suite(void)
     tcase_add_test(tc, ids_and_stats);
     tcase_add_test(tc, bad_input);
     tcase_add_test(tc, coherent_motion);
+    tcase_add_test(tc, pairs_only_switches_paths);
     tcase_add_test(tc, teleports);
     tcase_add_test(tc, churn);
     tcase_add_test(tc, mixed_sizes_1_to_1000);

@@ -183,6 +183,14 @@ static mk_aabb to_mk_aabb(const dReal *b)
     return box;
 }
 
+/* The dReal box inside the proxy's box, compared exactly (a float mk_real
+ * widens to dReal without rounding); NaN bounds are never inside. */
+static int inside_fat(const dReal *b, const mk_aabb *fat)
+{
+    return (dReal)fat->lo.x <= b[0] && b[1] <= (dReal)fat->hi.x && (dReal)fat->lo.y <= b[2] && b[3] <= (dReal)fat->hi.y &&
+           (dReal)fat->lo.z <= b[4] && b[5] <= (dReal)fat->hi.z;
+}
+
 static mk_aabb fatten(mk_aabb b)
 {
     mk_vec3 e = mk_v3_sub(b.hi, b.lo);
@@ -210,6 +218,9 @@ static mk_status create_bp(space_state *st, int capacity)
      * ten to one there; space collide took 14 ms a step instead of SAP's
      * 1.0 ms at 1000 spheres (ode_scenes --quick --scene stress). */
     def.kind = MK_BP_SAP;
+    /* The near callback gets the whole set each call, never the changes:
+     * lets incoherent frames (the heap exploding) skip the pair table. */
+    def.pairs_only = 1;
     s = mk_bp_create(&def, NULL, &st->bp);
     if (s == MK_ERR_UNSUPPORTED) { /* a build without SAP (MK_WITHOUT) */
         def.kind = MK_BP_AUTO;
@@ -349,11 +360,10 @@ static mk_status sync(space_state *st)
             s = add_entry(st, g, box, &slot);
             if (s != MK_OK) return s;
         } else if (memcmp(st->entries[slot].aabb, box, sizeof box) != 0) {
-            mk_aabb tight = to_mk_aabb(box);
             e = &st->entries[slot];
             memcpy(e->aabb, box, sizeof box);
-            if (!mk_aabb_contains(e->fat, tight)) {
-                e->fat = fatten(tight);
+            if (!inside_fat(box, &e->fat)) {
+                e->fat = fatten(to_mk_aabb(box));
                 s = mk_bp_move_proxy(st->bp, e->proxy, e->fat);
                 if (s != MK_OK) return s;
             }

@@ -119,6 +119,7 @@ typedef struct mk_bp_def {
     mk_bp_filter_mode filter_mode;/* default MK_BP_FILTER_NONE */
     mk_bp_pair_filter filter;     /* optional */
     void *filter_ctx;
+    int pairs_only;               /* nonzero: the caller reads mk_bp_pairs() only (no events) */
 } mk_bp_def;
 
 typedef struct mk_bp_pair { mk_bp_id a, b; } mk_bp_pair; /* a < b */
@@ -135,6 +136,7 @@ typedef struct mk_bp_stats {
     int cells;              /* grid: occupied cells */
     int candidates;         /* grid: candidate pairs held (pairs sharing a cell); others: pairs held */
     size_t bytes;           /* memory held, all blocks */
+    int sweeps;             /* SAP with pairs_only: updates answered by a stateless sweep so far */
 } mk_bp_stats;
 
 typedef struct mk_bp mk_bp;
@@ -153,7 +155,8 @@ MK_API mk_status mk_bp_create_proxy(mk_bp *bp, mk_aabb box, void *user, uint64_t
                                     int is_static, mk_bp_id *out);
 /* Its pairs disappear at the next update (reported in mk_bp_removed()). */
 MK_API mk_status mk_bp_destroy_proxy(mk_bp *bp, mk_bp_id id);
-/* New AABB; O(1), the structure catches up in mk_bp_update(). */
+/* New AABB; O(1), the structure catches up in mk_bp_update(). The same AABB
+ * as the last one given is not a move (resting bodies cost nothing). */
 MK_API mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box);
 /* New filter words: the proxy's pairs are re-filtered at the next update. */
 MK_API mk_status mk_bp_set_filter(mk_bp *bp, mk_bp_id id, uint64_t cat, uint64_t mask);
