@@ -2,7 +2,9 @@
 // one process on the same poses.
 //
 // Backends (each builds the full manifold of every case):
-//   minko                                mk_collide(), with a per-pair mk_manifold_cache
+//   minko                                mk_collide(), with a per-pair mk_manifold_cache (warm: faces
+//                                        preferred within the hysteresis band, manifold.h)
+//   minko.cold                           mk_collide() without a cache: the exact minimum axis
 //   bullet_f64.btBoxBoxDetector          Bullet's port of ODE's dBoxBox, called directly
 //   bullet_f64.btBoxBoxCollisionAlgorithm  what a Bullet world runs per box pair and frame:
 //                                        the detector plus the persistent-manifold update
@@ -12,15 +14,19 @@
 //            about the vertical, 0.1 to 50 mm deep: the face contacts of stacking
 //   random   boxes of half-extents 0.1 to 1, random orientations, overlapping
 // Per family and backend: ns per query (best of several timed loops over all
-// cases, same pose repeated as in a resting contact), relative error of the
+// cases, same pose repeated as in a resting contact, after one untimed pass
+// that warms every per-pair state; the accuracy columns judge the answers of
+// the pass after it, as timed), relative error of the
 // deepest reported point against the exact SAT depth (long-double oracle,
 // tests/support/oracle.h), angle of the normal against the exact normal,
 // failures (no contact reported for a penetrating pair, or an error status),
 // mean points per manifold. JSON Lines per ../shared/BENCH_FORMAT.md (suite
 // "contacts", case "box_box") plus a table.
 //
-//   bench_contacts [--quick] [--json FILE] [--family stacked|random]
-// (--family runs one case family, e.g. for callgrind instruction counts.)
+//   bench_contacts [--quick] [--json FILE] [--family stacked|random] [--backend NAME]
+// (--family runs one case family, --backend one backend (a prefix of its
+// name: minko, minko.cold, bullet, ode), e.g. for callgrind instruction
+// counts; ratios are then to that backend.)
 
 #include <algorithm>
 #include <cmath>
@@ -127,7 +133,8 @@ std::vector<Case> make_cases(const char *family, int n, uint64_t seed)
 struct MinkoRun {
     std::vector<mk_shape> a, b;
     std::vector<mk_manifold_cache> cache;
-    explicit MinkoRun(const std::vector<Case> &cs) : a(cs.size()), b(cs.size()), cache(cs.size())
+    bool warm;
+    MinkoRun(const std::vector<Case> &cs, bool warm_) : a(cs.size()), b(cs.size()), cache(cs.size()), warm(warm_)
     {
         for (size_t i = 0; i < cs.size(); ++i) {
             mk_shape_box(cs[i].ha, 0, &a[i]);
@@ -138,7 +145,7 @@ struct MinkoRun {
     void query(const std::vector<Case> &cs, size_t i, Answer *ans)
     {
         mk_manifold m;
-        mk_status st = mk_collide(&a[i], cs[i].xa, &b[i], cs[i].xb, 0, &cache[i], &m);
+        mk_status st = mk_collide(&a[i], cs[i].xa, &b[i], cs[i].xb, 0, warm ? &cache[i] : nullptr, &m);
         if (!ans) return;
         ans->failed = st != MK_OK || m.count == 0;
         if (ans->failed) return;
@@ -321,6 +328,7 @@ Backend measure(const char *name, Run &run, const std::vector<Case> &cs, int loo
     Backend be;
     be.name = name;
     be.answers.resize(cs.size());
+    for (size_t i = 0; i < cs.size(); ++i) run.query(cs, i, nullptr);
     for (size_t i = 0; i < cs.size(); ++i) run.query(cs, i, &be.answers[i]);
     be.ns = 1e300;
     for (int l = 0; l < loops; ++l) {
@@ -375,18 +383,27 @@ void report(FILE *jf, const char *family, const std::vector<Case> &cs, const std
     }
 }
 
+// --backend: "minko" names the warm run only; other names match as prefixes.
+bool wanted(const char *filter, const char *name)
+{
+    if (!filter) return true;
+    if (!strcmp(filter, "minko")) return !strcmp(name, "minko");
+    return !strncmp(name, filter, strlen(filter));
+}
+
 } // namespace
 
 int main(int argc, char **argv)
 {
     bool quick = false;
-    const char *json = nullptr, *only = nullptr;
+    const char *json = nullptr, *only = nullptr, *backend = nullptr;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--quick")) quick = true;
         else if (!strcmp(argv[i], "--json") && i + 1 < argc) json = argv[++i];
         else if (!strcmp(argv[i], "--family") && i + 1 < argc) only = argv[++i];
+        else if (!strcmp(argv[i], "--backend") && i + 1 < argc) backend = argv[++i];
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--family stacked|random]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--family stacked|random] [--backend NAME]\n", argv[0]);
             return 2;
         }
     }
@@ -411,28 +428,30 @@ int main(int argc, char **argv)
         std::vector<Case> cs = make_cases(fam, n, fam[0] == 's' ? 1 : 2);
         std::vector<Backend> bes;
         {
-            MinkoRun run(cs);
+            MinkoRun run(cs, true), cold(cs, false);
             mk_manifold probe;
             mk_status st = mk_collide(&run.a[0], cs[0].xa, &run.b[0], cs[0].xb, 0, nullptr, &probe);
             if (st != MK_OK) {
                 printf("%-8s minko: box-box is not in this build (%s); competitors only, ratios to the first of them\n", fam,
                        mk_status_name(st));
             } else {
-                bes.push_back(measure("minko", run, cs, loops));
+                if (wanted(backend, "minko")) bes.push_back(measure("minko", run, cs, loops));
+                if (wanted(backend, "minko.cold")) bes.push_back(measure("minko.cold", cold, cs, loops));
             }
         }
-        {
+        if (wanted(backend, bullet_detector)) {
             BulletDetectorRun run(cs);
             bes.push_back(measure(bullet_detector, run, cs, loops));
         }
-        {
+        if (wanted(backend, bullet_algorithm)) {
             BulletAlgorithmRun run(cs);
             bes.push_back(measure(bullet_algorithm, run, cs, loops));
         }
-        {
+        if (wanted(backend, "ode.dCollide")) {
             OdeRun run(cs);
             bes.push_back(measure("ode.dCollide", run, cs, loops));
         }
+        if (bes.empty()) continue;
         report(jf, fam, cs, bes);
     }
     dCloseODE();

@@ -8,8 +8,13 @@
 // broadphase part), mean pairs / manifolds with >= 1 point / contact points per
 // step, the deepest penetration seen (judged by one fixed referee for every
 // backend: Bullet's GJK-EPA signed distance on the tight-AABB-overlapping pairs),
-// drift, kinetic energy at the end, tunnelled bodies, and how far the end state is
-// from the native run's. JSON Lines per ../shared/BENCH_FORMAT.md (suite "bullet")
+// fallen bodies and drift, kinetic energy at the end, tunnelled bodies, and how
+// far the end state is from the native run's. A body has fallen when it ends
+// lower than where drift measurement started by more than half its height (a
+// toppled tower block, a barrel rolled off the pile, a slab that squeezed its
+// support out); drift is the largest displacement among the bodies that did
+// not fall, so it measures creep of what still stands instead of how far a
+// fallen body rolled, and is not reported for a trial in which every body fell. JSON Lines per ../shared/BENCH_FORMAT.md (suite "bullet")
 // with --json FILE, and a table on stdout.
 //
 // Timing: external steady_clock timers around stepSimulation and around the
@@ -590,6 +595,7 @@ struct Result {
     double ms_mean = 0, collision_ms_mean = 0;            // means: sleeping makes the medians bimodal
     double pairs = 0, manifolds = 0, points = 0;        // means per step
     double max_penetration = 0, drift = -1, ke_end = 0;
+    double fallen = -1;                                  // bodies that fell (-1: not measured)
     int tunnelled = 0, referee_failures = 0;
     double divergence = -1;                              // max |p - p_native| at the end
     long minko_pairs = -1, native_pairs = -1;            // Minko narrowphase: algorithms on Minko / left to Bullet
@@ -738,7 +744,12 @@ public:
     {
         btDiscreteDynamicsWorld *world = m_pipe.world;
         if (step == m_drift_step)
-            for (btRigidBody *b : m_bodies) m_drift_ref.push_back(b->getWorldTransform().getOrigin());
+            for (btRigidBody *b : m_bodies) {
+                btVector3 lo, hi;
+                b->getCollisionShape()->getAabb(b->getWorldTransform(), lo, hi);
+                m_drift_ref.push_back(b->getWorldTransform().getOrigin());
+                m_drift_half.push_back(btScalar(0.5) * (hi.y() - lo.y()));  // gravity is -y in every scene
+            }
         m_pipe.timers->reset();
         Clock::time_point t0 = Clock::now();
         world->stepSimulation(m_scene.dt, 0);
@@ -775,10 +786,20 @@ public:
             res.native_pairs = m_pipe.minko_config->stats.native_fallbacks.load();
         }
         if (m_drift_step >= 0) {
-            res.drift = 0;
-            for (size_t i = 0; i < m_bodies.size(); i++)
-                if (m_bodies[i]->getInvMass() > 0)
-                    res.drift = std::max(res.drift, (double)(m_bodies[i]->getWorldTransform().getOrigin() - m_drift_ref[i]).length());
+            int fallen = 0, standing = 0;
+            double drift = 0;
+            for (size_t i = 0; i < m_bodies.size(); i++) {
+                if (m_bodies[i]->getInvMass() == 0) continue;
+                const btVector3 &o = m_bodies[i]->getWorldTransform().getOrigin();
+                if (m_drift_ref[i].y() - o.y() > m_drift_half[i]) {
+                    fallen++;
+                    continue;
+                }
+                standing++;
+                drift = std::max(drift, (double)(o - m_drift_ref[i]).length());
+            }
+            res.fallen = fallen;
+            res.drift = standing ? drift : -1;
         }
         for (size_t i = 0; i < m_bodies.size(); i++) {
             const BodySpec &bs = m_scene.bodies[i];
@@ -830,24 +851,28 @@ private:
     Result m_res;
     std::vector<btRigidBody *> m_bodies;
     std::vector<btVector3> m_drift_ref;
+    std::vector<btScalar> m_drift_half;  // half height of each body's box where drift starts
     std::vector<double> m_t_step, m_t_coll, m_t_bp;
     Referee m_referee;
     double m_sum_pairs = 0, m_sum_manifolds = 0, m_sum_points = 0;
 };
 
 // Each figure's median over the trials, but tunnelled bodies the worst trial's
-// and referee failures summed (end positions: the first trial's).
+// and referee failures summed (end positions: the first trial's). Drift is
+// the median over the trials that have one (something stood), -1 if none.
 Result median_of(const std::vector<Result> &trials)
 {
     Result r = trials[0];
     auto med = [&trials](double Result::*f) {
         std::vector<double> v;
-        for (const Result &t : trials) v.push_back(t.*f);
-        return median(v);
+        for (const Result &t : trials)
+            if (t.*f >= 0) v.push_back(t.*f);
+        return v.empty() ? -1.0 : median(v);
     };
     for (double Result::*f : {&Result::ms, &Result::collision_ms, &Result::broadphase_ms, &Result::ms_mean,
                               &Result::collision_ms_mean, &Result::pairs, &Result::manifolds, &Result::points,
-                              &Result::max_penetration, &Result::drift, &Result::ke_end, &Result::divergence})
+                              &Result::max_penetration, &Result::drift, &Result::fallen, &Result::ke_end,
+                              &Result::divergence})
         r.*f = med(f);
     r.referee_failures = 0;
     for (const Result &t : trials) {
@@ -862,21 +887,22 @@ Result median_of(const std::vector<Result> &trials)
 
 void print_header()
 {
-    std::printf("%-13s %-13s %-20s %5s %5s %9s %9s %9s %6s %8s %8s %8s %10s %10s %10s %4s %10s\n", "scene", "variant",
-                "backend", "bodies", "steps", "ms/step", "coll_ms", "bp_ms", "coll/n", "pairs", "manif", "points",
-                "max_pen", "drift", "ke_end", "tun", "div_native");
+    std::printf("%-13s %-13s %-20s %5s %5s %9s %9s %9s %6s %8s %8s %8s %10s %5s %10s %10s %4s %10s\n", "scene",
+                "variant", "backend", "bodies", "steps", "ms/step", "coll_ms", "bp_ms", "coll/n", "pairs", "manif",
+                "points", "max_pen", "fell", "drift", "ke_end", "tun", "div_native");
 }
 
 void print_row(const SceneSpec &s, const Result &r, const Result &native)
 {
-    char drift[32] = "-", div[32] = "-", ratio[32] = "-";
+    char drift[32] = "-", fell[32] = "-", div[32] = "-", ratio[32] = "-";
     if (r.drift >= 0) std::snprintf(drift, sizeof drift, "%.3g", r.drift);
+    if (r.fallen >= 0) std::snprintf(fell, sizeof fell, "%.3g", r.fallen);
     if (r.divergence >= 0) std::snprintf(div, sizeof div, "%.3g", r.divergence);
     if (native.collision_ms > 0) std::snprintf(ratio, sizeof ratio, "%.2f", r.collision_ms / native.collision_ms);
-    std::printf("%-13s %-13s %-20s %5d %5d %9.3f %9.3f %9.3f %6s %8.1f %8.1f %8.1f %10.3g %10s %10.3g %4d %10s\n",
+    std::printf("%-13s %-13s %-20s %5d %5d %9.3f %9.3f %9.3f %6s %8.1f %8.1f %8.1f %10.3g %5s %10s %10.3g %4d %10s\n",
                 s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.bodies, r.steps, r.ms, r.collision_ms,
-                r.broadphase_ms, ratio, r.pairs, r.manifolds, r.points, r.max_penetration, drift, r.ke_end, r.tunnelled,
-                div);
+                r.broadphase_ms, ratio, r.pairs, r.manifolds, r.points, r.max_penetration, fell, drift, r.ke_end,
+                r.tunnelled, div);
     if (r.referee_failures) std::printf("    (referee: %d pairs it could not judge)\n", r.referee_failures);
     if (r.minko_pairs >= 0 && r.native_pairs > 0)
         std::printf("    (narrowphase: %ld pair algorithms on Minko, %ld left to Bullet by this build)\n", r.minko_pairs,
@@ -895,6 +921,7 @@ void write_json(FILE *f, const SceneSpec &s, const Result &r)
                  r.broadphase_ms, r.ms_mean, r.collision_ms_mean, r.pairs, r.manifolds, r.points, r.max_penetration, r.ke_end, r.tunnelled);
     if (r.trials > 1) std::fprintf(f, ",\"trials\":%d", r.trials);
     if (r.drift >= 0) std::fprintf(f, ",\"drift\":%.6g", r.drift);
+    if (r.fallen >= 0) std::fprintf(f, ",\"fallen\":%.6g", r.fallen);
     if (r.divergence >= 0) std::fprintf(f, ",\"divergence_from_native\":%.6g", r.divergence);
     if (r.referee_failures) std::fprintf(f, ",\"failures\":%d", r.referee_failures);
     if (r.minko_pairs >= 0)

@@ -129,10 +129,9 @@ static mk_status iterative(const mk_pair *p, mk_gjk_cache *cache, answer *ans)
         return MK_ERR_UNSUPPORTED;
 #else
         mk_epa_result e;
-        int ha = -1, hb = -1;
         mk_epa(p, &g.s, g.scale, &e);
         n = e.normal;
-        sep = mk_pair_separation(p, n, &ha, &hb);
+        sep = e.separation;
         weighted(e.face, e.l, 3, &pa, &pb);
         ans->iterations += e.iterations;
         if (e.state != MK_SOLVE_CONVERGED) ans->state = e.state;
@@ -185,11 +184,6 @@ static int in_box(mk_vec3 h, mk_vec3 x, mk_real tol)
     return mk_fabs_(x.x) <= h.x + tol && mk_fabs_(x.y) <= h.y + tol && mk_fabs_(x.z) <= h.z + tol;
 }
 
-static mk_vec3 clamp_box(mk_vec3 h, mk_vec3 x)
-{
-    return mk_v3(mk_clamp(x.x, -h.x, h.x), mk_clamp(x.y, -h.y, h.y), mk_clamp(x.z, -h.z, h.z));
-}
-
 /* Witnesses of a SAT axis n with separation d for one box (half extents hf,
  * its own frame) and the other box's supporting corner q (same frame): q
  * moved back by d along n lands on this box's supporting plane; clamped into
@@ -201,7 +195,7 @@ static mk_vec3 clamp_box(mk_vec3 h, mk_vec3 x)
 static int face_witness(mk_vec3 hf, mk_vec3 ho, const mk_mat3 *r_o, mk_vec3 t_o, mk_vec3 q, mk_real d, mk_vec3 n, mk_real tol,
                         mk_vec3 *on_face, mk_vec3 *on_other)
 {
-    mk_vec3 x0 = mk_v3_mad(q, -d, n), x = clamp_box(hf, x0), y = mk_v3_mad(x, d, n);
+    mk_vec3 x0 = mk_v3_mad(q, -d, n), x = mk_box_clamp(hf, x0), y = mk_v3_mad(x, d, n);
     *on_face = x;
     *on_other = q;
     if (!(mk_fabs_(mk_v3_dot(n, mk_v3_sub(x, x0))) <= tol)) return 0; /* clamping left the plane */
@@ -210,24 +204,30 @@ static int face_witness(mk_vec3 hf, mk_vec3 ho, const mk_mat3 *r_o, mk_vec3 t_o,
     return in_box(ho, mk_mat3_tmul_v3(*r_o, mk_v3_sub(y, t_o)), tol);
 }
 
-/* Face witnesses with A, then B, as the box the other's corner projects on. */
-static int face_witnesses(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+/* Face witnesses with A as the box B's supporting corner projects on. */
+static int face_witness_on_a(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
 {
-    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, qa, qb, tb, nb;
-    mk_mat3 rt;
     int f = -1;
     *pb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &f)), p->t);
-    if (face_witness(ha, hb, &p->r, p->t, *pb, d, n, tol, pa, pb)) return 1;
-    /* in B's frame, with B's axes and A's corner */
-    rt = mk_mat3_transpose(p->r);
-    tb = mk_v3_neg(mk_mat3_tmul_v3(p->r, p->t));
-    nb = mk_mat3_tmul_v3(p->r, mk_v3_neg(n));
-    f = -1;
+    return face_witness(p->a->u.half_extents, p->b->u.half_extents, &p->r, p->t, *pb, d, n, tol, pa, pb);
+}
+
+/* The same with B as the face box, worked in B's frame with A's corner. */
+static int face_witness_on_b(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+{
+    mk_mat3 rt = mk_mat3_transpose(p->r);
+    mk_vec3 tb = mk_v3_neg(mk_mat3_tmul_v3(p->r, p->t)), nb = mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), qa, qb;
+    int f = -1;
     qa = mk_v3_add(mk_mat3_mul_v3(rt, mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &f)), tb);
-    if (!face_witness(hb, ha, &rt, tb, qa, d, nb, tol, &qb, &qa)) return 0;
+    if (!face_witness(p->b->u.half_extents, p->a->u.half_extents, &rt, tb, qa, d, nb, tol, &qb, &qa)) return 0;
     *pa = mk_v3_add(mk_mat3_mul_v3(p->r, qa), p->t);
     *pb = mk_v3_add(mk_mat3_mul_v3(p->r, qb), p->t);
     return 1;
+}
+
+static int face_witnesses(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+{
+    return face_witness_on_a(p, d, n, tol, pa, pb) || face_witness_on_b(p, d, n, tol, pa, pb);
 }
 
 /* sep(u) of two box cores for a unit u from A towards B, in closed form. */
@@ -250,10 +250,10 @@ static mk_real corner_pair(const mk_pair *p, int side, int c, mk_vec3 *pa, mk_ve
 {
     if (side == 0) {
         *pb = mk_v3_add(mk_mat3_mul_v3(p->r, box_corner(p->b->u.half_extents, c)), p->t);
-        *pa = clamp_box(p->a->u.half_extents, *pb);
+        *pa = mk_box_clamp(p->a->u.half_extents, *pb);
     } else {
         *pa = box_corner(p->a->u.half_extents, c);
-        *pb = mk_v3_add(mk_mat3_mul_v3(p->r, clamp_box(p->b->u.half_extents, mk_mat3_tmul_v3(p->r, mk_v3_sub(*pa, p->t)))),
+        *pb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_box_clamp(p->b->u.half_extents, mk_mat3_tmul_v3(p->r, mk_v3_sub(*pa, p->t)))),
                         p->t);
     }
     return mk_v3_len2(mk_v3_sub(*pb, *pa));
@@ -288,6 +288,35 @@ static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d
     return corner_certified(p, side, corner, tol, d, pa, pb);
 }
 
+/* The best of the six face axes of two box cores (A's e_i, B's R_j, each
+ * turned to point from A towards B) in closed form: the face-axis half of
+ * SAT, which a separated pair often needs alone (box_box_sat). */
+static mk_real box_face_axes(const mk_pair *p, mk_vec3 *n, int *of_b)
+{
+    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, tb = mk_mat3_tmul_v3(p->r, p->t);
+    mk_mat3 ar = mk_mat3_abs(p->r);
+    /* B's extent along A's axes is |R| hb, A's along B's is |R|^T ha. */
+    mk_vec3 sa = mk_v3_sub(mk_v3_sub(mk_v3_abs(p->t), ha), mk_mat3_mul_v3(ar, hb));
+    mk_vec3 sb = mk_v3_sub(mk_v3_sub(mk_v3_abs(tb), hb), mk_mat3_tmul_v3(ar, ha));
+    mk_real best = sa.x, s;
+    int axis = 0;
+    if (sa.y > best) best = sa.y, axis = 1;
+    if (sa.z > best) best = sa.z, axis = 2;
+    if (sb.x > best) best = sb.x, axis = 3;
+    if (sb.y > best) best = sb.y, axis = 4;
+    if (sb.z > best) best = sb.z, axis = 5;
+    *of_b = axis >= 3;
+    switch (axis) {
+    case 0: *n = mk_v3(p->t.x >= 0 ? 1 : -1, 0, 0); break;
+    case 1: *n = mk_v3(0, p->t.y >= 0 ? 1 : -1, 0); break;
+    case 2: *n = mk_v3(0, 0, p->t.z >= 0 ? 1 : -1); break;
+    default:
+        s = (axis == 3 ? tb.x : axis == 4 ? tb.y : tb.z) >= 0 ? 1 : -1;
+        *n = mk_v3_scale(axis == 3 ? p->r.c0 : axis == 4 ? p->r.c1 : p->r.c2, s);
+    }
+    return best;
+}
+
 /* Box cores by SAT's 15 axes (face normals and edge cross products of the
  * original boxes, about a tenth of GJK + EPA). Its best axis gives a bound
  * that is exact for overlapping cores; for separated ones it is a lower bound
@@ -296,38 +325,48 @@ static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d
  * separation apart along the axis they are an upper bound equal to it, and
  * the answer is certified exact with no GJK: about 70% of random separated
  * pairs (corner-face and edge-edge closest features), every crossing rod and
- * every overlapping pair of issue 2's families. Separated pairs whose closest
- * features are a corner and an edge (or two corners) are certified by the
- * corner and its clamp (corner_witnesses). Otherwise (ties at rounding level)
- * returns 0 and GJK, then EPA if the cores overlap, answers. */
+ * every overlapping pair of issue 2's families. Any axis with such witnesses
+ * certifies the distance (no other axis can separate by more than two actual
+ * surface points are apart), so a pair whose best face axis already
+ * separates tries that axis first and skips the nine edge axes when it
+ * holds: corner-face pairs, most separated pairs, pay about half as much.
+ * Separated pairs whose closest features are a corner and an edge (or two
+ * corners) are certified by the corner and its clamp (corner_witnesses).
+ * Otherwise (ties at rounding level) returns 0 and GJK, then EPA if the cores
+ * overlap, answers. */
 static int box_box_sat(const mk_pair *p, answer *ans)
 {
     mk_sat_options o = mk_sat_defaults();
     mk_sat_result s;
     mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, n, pa, pb;
     mk_real tol = 64 * MK_REAL_EPSILON * (mk_v3_max_abs(ha) + mk_v3_max_abs(hb) + mk_v3_max_abs(p->t)), d;
-    int ok = 0;
-    mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
-    d = s.best;
-    n = s.normal;
-    if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
-    if (s.kind == MK_SAT_EDGES) { /* the closest points of the two supporting edges */
-        mk_vec3 a0, a1, b0, b1;
-        mk_real u, v;
-        box_support_edge(ha, n, &a0, &a1);
-        box_support_edge(hb, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &b0, &b1);
-        b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
-        b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
-        mk_segment_segment(a0, a1, b0, b1, &u, &v);
-        pa = mk_v3_lerp(a0, a1, u);
-        pb = mk_v3_lerp(b0, b1, v);
-        ok = mk_v3_max_abs(mk_v3_sub(mk_v3_sub(pb, pa), mk_v3_scale(n, d))) <= tol;
-    }
-    /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
-    if (!ok && !face_witnesses(p, d, n, tol, &pa, &pb)) {
-        /* Apart, but no feature pair realises SAT's bound: a corner may. */
-        if (!(d > 0) || !corner_witnesses(p, n, tol, &d, &pa, &pb)) return 0;
-        n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
+    int ok = 0, of_b;
+    d = box_face_axes(p, &n, &of_b);
+    /* B's corner under A's face, or A's under B's: the other side almost never
+     * holds off parallel faces, which SAT's path below still tries. */
+    if (!(d > 0) || !(of_b ? face_witness_on_b : face_witness_on_a)(p, d, n, tol, &pa, &pb)) {
+        mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
+        d = s.best;
+        n = s.normal;
+        if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
+        if (s.kind == MK_SAT_EDGES) { /* the closest points of the two supporting edges */
+            mk_vec3 a0, a1, b0, b1;
+            mk_real u, v;
+            box_support_edge(ha, n, &a0, &a1);
+            box_support_edge(hb, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &b0, &b1);
+            b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
+            b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
+            mk_segment_segment(a0, a1, b0, b1, &u, &v);
+            pa = mk_v3_lerp(a0, a1, u);
+            pb = mk_v3_lerp(b0, b1, v);
+            ok = mk_v3_max_abs(mk_v3_sub(mk_v3_sub(pb, pa), mk_v3_scale(n, d))) <= tol;
+        }
+        /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
+        if (!ok && !face_witnesses(p, d, n, tol, &pa, &pb)) {
+            /* Apart, but no feature pair realises SAT's bound: a corner may. */
+            if (!(d > 0) || !corner_witnesses(p, n, tol, &d, &pa, &pb)) return 0;
+            n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
+        }
     }
     witnesses(pa, pb, d, n, &pa, &pb);
     ans->hit = grow_core(pa, pb, d, n, p);
@@ -375,10 +414,10 @@ MK_ALWAYS_INLINE void put_aligned(mk_hit h, mk_vec3 pa, int flip, mk_distance_re
 MK_ALWAYS_INLINE void spheres(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
                               mk_distance_result *r)
 {
-    mk_vec3 d = mk_v3_sub(xb->p, xa->p);
-    mk_real l = mk_v3_len(d);
+    mk_real l;
+    mk_vec3 n = mk_unit_len(mk_v3_sub(xb->p, xa->p), &l);
     /* Concentric spheres: every direction is a shortest way out; take +z. */
-    mk_vec3 n = l > 0 ? mk_v3_scale(d, 1 / l) : mk_v3(0, 0, 1);
+    if (!(l > 0)) n = mk_v3(0, 0, 1);
     put(l - a->radius - b->radius, n, mk_v3_mad(xa->p, a->radius, n), 0, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 

@@ -162,27 +162,34 @@ static int known_vertex(const epa_poly *P, const mk_cso_vertex *w)
     return 0;
 }
 
-/* Removes every face vertex wi sees (flood fill from f0, which sees it) and
- * fans the silhouette to wi. Returns 0 on a defect; the polytope is then
- * abandoned, so partial updates do not matter. */
+/* Removes every face vertex wi sees and fans the silhouette to wi. The flood
+ * fill is a depth-first walk from f0 (which sees wi) that enters each face
+ * through one edge and then tries its other two edges in loop order, so the
+ * silhouette edges come out in order around the hole (Bullet's EPA walks the
+ * same way): new face k meets new face k + 1 along (b_k, wi), with no search.
+ * Returns 0 on a defect (a silhouette that does not close); the polytope is
+ * then abandoned, so partial updates do not matter. */
 static int expand(epa_poly *P, int f0, int wi)
 {
+    static const unsigned char next3[5] = {1, 2, 0, 1, 2};
     short stack_f[MK_EPA_MAX_FACES], removed[MK_EPA_MAX_FACES], nf_new[MK_EPA_MAX_FACES];
     short hz_g[MK_EPA_MAX_FACES], hz_a[MK_EPA_MAX_FACES], hz_b[MK_EPA_MAX_FACES];
-    unsigned char stack_e[MK_EPA_MAX_FACES], hz_j[MK_EPA_MAX_FACES];
-    int sp = 0, nr = 0, nh = 0, k, m;
+    unsigned char stack_e[MK_EPA_MAX_FACES], stack_left[MK_EPA_MAX_FACES], hz_j[MK_EPA_MAX_FACES];
+    int sp = 0, nr = 0, nh = 0, k;
     mk_vec3 w = P->v[wi].w;
     P->f[f0].live = 0;
     removed[nr++] = (short)f0;
     stack_f[sp] = (short)f0;
-    stack_e[sp++] = 0;
+    stack_e[sp] = 0;
+    stack_left[sp++] = 3;
     while (sp > 0) {
         int f = stack_f[sp - 1], i = stack_e[sp - 1], g, j;
-        if (i == 3) {
+        if (stack_left[sp - 1] == 0) {
             --sp;
             continue;
         }
-        stack_e[sp - 1] = (unsigned char)(i + 1);
+        stack_e[sp - 1] = next3[i];
+        stack_left[sp - 1]--;
         g = P->f[f].adj[i];
         j = P->f[f].edge[i];
         if (!P->f[g].live) continue;
@@ -190,12 +197,13 @@ static int expand(epa_poly *P, int f0, int wi)
             P->f[g].live = 0;
             removed[nr++] = (short)g;
             stack_f[sp] = (short)g;
-            stack_e[sp++] = 0;
+            stack_e[sp] = next3[j];
+            stack_left[sp++] = 2;
         } else {
             hz_g[nh] = (short)g;
             hz_j[nh] = (unsigned char)j;
             hz_a[nh] = P->f[f].v[i];
-            hz_b[nh] = P->f[f].v[(i + 1) % 3];
+            hz_b[nh] = P->f[f].v[next3[i]];
             nh++;
         }
     }
@@ -206,16 +214,12 @@ static int expand(epa_poly *P, int f0, int wi)
     }
     for (k = 0; k < nh; ++k) {
         int f = face_alloc(P);
-        if (f < 0 || !face_set(P, f, hz_a[k], hz_b[k], wi)) return 0;
+        if (hz_b[k] != hz_a[k + 1 < nh ? k + 1 : 0] || f < 0 || !face_set(P, f, hz_a[k], hz_b[k], wi)) return 0;
         link(P, f, 0, hz_g[k], hz_j[k]);
         nf_new[k] = (short)f;
     }
-    /* Close the fan: the face over (a, b) meets the face over (b, c) along (b, w). */
-    for (k = 0; k < nh; ++k) {
-        for (m = 0; m < nh && hz_a[m] != hz_b[k]; ++m) {}
-        if (m == nh) return 0;
-        link(P, nf_new[k], 1, nf_new[m], 2);
-    }
+    /* Close the fan: the face over (a, b) meets the next one, over (b, c), along (b, w). */
+    for (k = 0; k < nh; ++k) link(P, nf_new[k], 1, nf_new[k + 1 < nh ? k + 1 : 0], 2);
     return 1;
 }
 
@@ -242,6 +246,12 @@ static void answer(const epa_poly *P, const epa_face *F, mk_epa_result *out)
     out->depth = F->dist;
 }
 
+static mk_real separation_along(const mk_pair *p, mk_vec3 n, const mk_cso_vertex *hint)
+{
+    int ha = hint->ia, hb = hint->ib;
+    return mk_pair_separation(p, n, &ha, &hb);
+}
+
 /* No tetrahedron: the CSO is flat around the origin, so the shapes touch. */
 static int flat_answer(const mk_pair *p, const mk_simplex *s, mk_epa_result *out)
 {
@@ -255,12 +265,16 @@ static int flat_answer(const mk_pair *p, const mk_simplex *s, mk_epa_result *out
     if (!(mk_v3_len2(n) > 0)) n = mk_v3_len2(p->t) > 0 ? p->t : mk_v3(1, 0, 0);
     out->normal = mk_v3_normalize(n);
     out->depth = 0;
+    out->separation = separation_along(p, out->normal, &out->face[0]);
     out->iterations = 0;
     out->state = MK_SOLVE_DEGENERATE;
     return -1;
 }
 
-int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+/* The loop, inlined into one copy per specialised pair of shape types (as
+ * GJK's: the supports lose their type switches) and one generic copy. */
+MK_ALWAYS_INLINE int epa_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, const mk_simplex *s, mk_real scale,
+                              mk_epa_result *out)
 {
     epa_poly P;
     epa_face best;
@@ -276,10 +290,13 @@ int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *
         best = P.f[f]; /* expand may reuse f's slot before it finds a defect */
         out->iterations = it + 1;
         if (P.nv == MK_EPA_MAX_VERTICES) break;
-        w = mk_pair_support(p, best.n, P.v[best.v[0]].ia, P.v[best.v[0]].ib);
+        w = mk_pair_support_typed(p, ta, tb, best.n, P.v[best.v[0]].ia, P.v[best.v[0]].ib);
         if (known_vertex(&P, &w) || mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol) {
+            /* w is the support along the answer's normal: its sep, for free */
+            out->separation = -mk_v3_dot(best.n, w.w);
             out->state = MK_SOLVE_CONVERGED;
-            break;
+            answer(&P, &best, out);
+            return 0;
         }
         P.v[P.nv] = w;
         if (!expand(&P, f, P.nv++)) {
@@ -288,5 +305,35 @@ int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *
         }
     }
     answer(&P, &best, out);
+    out->separation = separation_along(p, best.n, &out->face[0]);
     return 0;
+}
+
+static int epa_hull_hull(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    return epa_loop(p, MK_SHAPE_HULL, MK_SHAPE_HULL, s, scale, out);
+}
+
+static int epa_hull_box(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    return epa_loop(p, MK_SHAPE_HULL, MK_SHAPE_BOX, s, scale, out);
+}
+
+static int epa_box_hull(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    return epa_loop(p, MK_SHAPE_BOX, MK_SHAPE_HULL, s, scale, out);
+}
+
+static int epa_any(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    return epa_loop(p, p->a->type, p->b->type, s, scale, out);
+}
+
+int mk_epa(const mk_pair *p, const mk_simplex *s, mk_real scale, mk_epa_result *out)
+{
+    mk_shape_type ta = p->a->type, tb = p->b->type;
+    if (ta == MK_SHAPE_HULL && tb == MK_SHAPE_HULL) return epa_hull_hull(p, s, scale, out);
+    if (ta == MK_SHAPE_HULL && tb == MK_SHAPE_BOX) return epa_hull_box(p, s, scale, out);
+    if (ta == MK_SHAPE_BOX && tb == MK_SHAPE_HULL) return epa_box_hull(p, s, scale, out);
+    return epa_any(p, s, scale, out);
 }

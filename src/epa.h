@@ -32,6 +32,8 @@ typedef struct mk_epa_result {
     mk_real l[3];          /* barycentric coordinates of the origin's projection on it */
     mk_vec3 normal;        /* its unit outward normal: from A towards B */
     mk_real depth;         /* its distance from the origin: a lower bound on the core penetration depth */
+    mk_real separation;    /* sep(normal) from the support functions (gjk.h): minus the core depth along
+                            * normal, exact to rounding when normal is the optimum */
     int iterations;
     mk_solve_state state;
 } mk_epa_result;

@@ -320,6 +320,16 @@ static void gjk_hull_hull(const mk_pair *p, const mk_gjk_cache *c, int boolean, 
     gjk_loop(p, MK_SHAPE_HULL, MK_SHAPE_HULL, c, boolean, r, out);
 }
 
+static void gjk_hull_box(const mk_pair *p, const mk_gjk_cache *c, int boolean, mk_real r, mk_gjk_result *out)
+{
+    gjk_loop(p, MK_SHAPE_HULL, MK_SHAPE_BOX, c, boolean, r, out);
+}
+
+static void gjk_box_hull(const mk_pair *p, const mk_gjk_cache *c, int boolean, mk_real r, mk_gjk_result *out)
+{
+    gjk_loop(p, MK_SHAPE_BOX, MK_SHAPE_HULL, c, boolean, r, out);
+}
+
 static void gjk_any(const mk_pair *p, const mk_gjk_cache *c, int boolean, mk_real r, mk_gjk_result *out)
 {
     gjk_loop(p, p->a->type, p->b->type, c, boolean, r, out);
@@ -330,6 +340,8 @@ void mk_gjk(const mk_pair *p, const mk_gjk_cache *cache, int boolean, mk_real ra
     mk_shape_type ta = p->a->type, tb = p->b->type;
     if (ta == MK_SHAPE_BOX && tb == MK_SHAPE_BOX) gjk_box_box(p, cache, boolean, radius, out);
     else if (ta == MK_SHAPE_HULL && tb == MK_SHAPE_HULL) gjk_hull_hull(p, cache, boolean, radius, out);
+    else if (ta == MK_SHAPE_HULL && tb == MK_SHAPE_BOX) gjk_hull_box(p, cache, boolean, radius, out);
+    else if (ta == MK_SHAPE_BOX && tb == MK_SHAPE_HULL) gjk_box_hull(p, cache, boolean, radius, out);
     else gjk_any(p, cache, boolean, radius, out);
 }
 

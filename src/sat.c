@@ -310,8 +310,6 @@ static int box_edge(int axis, const mk_real *s)
     return 4 * axis + (s[lo] > 0) + 2 * (s[hi] > 0);
 }
 
-static mk_vec3 v3a(const mk_real *v) { return mk_v3(v[0], v[1], v[2]); }
-
 /* sep / sqrt(l2) > best, without the square root and division: an edge axis
  * seldom wins, so only the winners pay for normalising. Rounding may split a
  * near-tie the other way, which only picks an axis of equal separation. */
@@ -345,33 +343,48 @@ MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_
 }
 
 /* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
- * frame), so every axis below is a few multiply-adds on scalars. */
+ * frame), so every axis below is a few multiply-adds on scalars. Only the
+ * index of the best axis of each kind is kept while testing; its normal is
+ * built once at the end. The early stop looks at whole groups (A's faces,
+ * B's faces, the edges): the answer is then the best of the groups tested. */
 void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
 {
     sat_ctx c;
-    mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
+    mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3], L[3], Lb[3], l;
     int i, j, k;
-    const mk_vec3 *cols[3];
-    cols[0] = &R->c0, cols[1] = &R->c1, cols[2] = &R->c2;
-    for (j = 0; j < 3; ++j) {
-        r[0][j] = cols[j]->x, r[1][j] = cols[j]->y, r[2][j] = cols[j]->z;
-        for (i = 0; i < 3; ++i) ar[i][j] = mk_fabs_(r[i][j]);
-    }
+    r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
+    r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
+    r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) ar[i][j] = mk_fabs_(r[i][j]);
     a[0] = ha.x, a[1] = ha.y, a[2] = ha.z;
     b[0] = hb.x, b[1] = hb.y, b[2] = hb.z;
     d[0] = t.x, d[1] = t.y, d[2] = t.z;
-    ctx_init(&c, R, t, opt);
+    c.stop = opt->stop_above;
+    c.stopped = 0;
+    c.edges.sep = -MK_REAL_MAX;
+    c.edges.a = c.edges.b = -1;
     /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
-    for (i = 0; i < 3 && !c.stopped; ++i) {
-        mk_real n[3] = {0, 0, 0};
-        n[i] = d[i] >= 0 ? 1 : -1;
-        offer(&c, &c.face_a, mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]), 2 * i + (d[i] >= 0), -1, v3a(n));
+    c.face_a.sep = -MK_REAL_MAX;
+    c.face_a.a = 0;
+    for (i = 0; i < 3; ++i) {
+        mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
+        if (sep > c.face_a.sep) c.face_a.sep = sep, c.face_a.a = i;
     }
     /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along +R_j. */
-    for (j = 0; j < 3 && !c.stopped; ++j) {
-        mk_real dj = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2], s = dj >= 0 ? 1 : -1;
-        offer(&c, &c.face_b, mk_fabs_(dj) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]), -1, 2 * j + (dj < 0),
-              mk_v3(s * r[0][j], s * r[1][j], s * r[2][j]));
+    c.face_b.sep = -MK_REAL_MAX;
+    c.face_b.a = c.face_b.b = -1;
+    c.face_b.n = mk_v3_zero();
+    if (c.face_a.sep > c.stop) {
+        c.stopped = 1;
+    } else {
+        for (j = 0; j < 3; ++j) {
+            mk_real sep;
+            db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
+            sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
+            if (sep > c.face_b.sep) c.face_b.sep = sep, c.face_b.b = j;
+        }
+        c.stopped = c.face_b.sep > c.stop;
     }
     /* Edge pairs: only the winner's normal and features are worked out. */
     if (!c.stopped) {
@@ -387,10 +400,21 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
         box_edge_axis(r, ar, a, b, d, 2, 2, &c.edges);
         if (c.edges.sep > c.stop) c.stopped = 1;
     }
+    /* The normals and feature indices of the kinds' winners. */
+    i = c.face_a.a;
+    c.face_a.n = mk_v3(i == 0 ? (d[0] >= 0 ? 1 : -1) : 0, i == 1 ? (d[1] >= 0 ? 1 : -1) : 0, i == 2 ? (d[2] >= 0 ? 1 : -1) : 0);
+    c.face_a.a = 2 * i + (d[i] >= 0);
+    c.face_a.b = -1;
+    if (c.face_b.sep > -MK_REAL_MAX) {
+        mk_real sj;
+        j = c.face_b.b;
+        sj = db[j] >= 0 ? 1 : -1;
+        c.face_b.n = mk_v3(sj * r[0][j], sj * r[1][j], sj * r[2][j]);
+        c.face_b.b = 2 * j + (db[j] < 0);
+    }
     if (c.edges.a >= 0) {
         /* L = e_i x R_j pointing from A to B; A's supporting edge sits at the
          * corner with the signs of L, B's at the corner with those of -R^T L. */
-        mk_real L[3], Lb[3], l;
         i = c.edges.a;
         j = c.edges.b;
         L[i] = 0, L[(i + 1) % 3] = -r[(i + 2) % 3][j], L[(i + 2) % 3] = r[(i + 1) % 3][j];

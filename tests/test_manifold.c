@@ -687,6 +687,40 @@ START_TEST(box_box_random_exact_depth)
 }
 END_TEST
 
+/* Boxes apart: mk_collide returns before any SAT when their bounding balls
+ * are farther apart than the margin. Corner to corner along the diagonal
+ * the balls' gap is the boxes' distance, so the margin's edge is exact: a
+ * speculative point just inside it, none just outside, and the cache's axis
+ * dropped. */
+START_TEST(box_box_apart_margin_edge)
+{
+    mk_shape a;
+    mk_manifold m;
+    mk_manifold_cache cache;
+    mk_vec3 dir = mk_v3_normalize(mk_v3(1, 1, 1));
+    mk_real margin = (mk_real)0.1, root3 = (mk_real)1.7320508075688772;
+    int k;
+    mk_shape_box(mk_v3(0.5, 0.5, 0.5), 0, &a);
+    for (k = 0; k < 2; ++k) {
+        mk_real gap = margin * (k ? (mk_real)1.001 : (mk_real)0.999);
+        memset(&cache, 0, sizeof cache);
+        cache.axis = 1;
+        MK_ASSERT_STATUS(mk_collide(&a, at(0, 0, 0), &a, mk_transform_make(mk_v3_scale(dir, root3 + gap), mk_quat_identity()), margin,
+                                   &cache, &m),
+                         MK_OK);
+        if (k) {
+            ck_assert_int_eq(m.count, 0);
+            ck_assert_int_eq(cache.axis, 0);
+        } else {
+            ck_assert_int_eq(m.count, 1);
+            MK_ASSERT_NEAR(m.points[0].depth, -gap, 64 * TOL);
+            ck_assert_uint_eq(m.points[0].features, PAIR(V(7), V(0)));
+            ck_assert_uint_eq(m.points[0].flags, MK_CONTACT_SPECULATIVE);
+        }
+    }
+}
+END_TEST
+
 /* Cylinder standing on a box, sphere on a cylinder's cap, capsule lying on a
  * cylinder's side: GJK gives the normal, the support features the points. */
 START_TEST(smooth_pairs_through_gjk)
@@ -1115,6 +1149,7 @@ static Suite *manifold_suite(void)
     tcase_add_test(tc, box_box_face_overlap_rectangle);
     tcase_add_test(tc, box_box_edge_contacts);
     tcase_add_test(tc, box_box_random_exact_depth);
+    tcase_add_test(tc, box_box_apart_margin_edge);
     tcase_add_test(tc, smooth_pairs_through_gjk);
     tcase_add_test(tc, hull_cube_contacts);
     tcase_add_test(tc, hull_large_face_on_plane);

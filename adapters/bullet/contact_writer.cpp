@@ -6,28 +6,47 @@ namespace mkb {
 
 namespace {
 
-// The point btManifoldResult::addContactPoint would build, with the feature
-// keys in the part ids (body 0 / body 1 of the manifold).
-btManifoldPoint make_point(const btCollisionObject *o0, const btCollisionObject *o1, bool swapped, int index0,
-                           int index1, const PairContact &c)
+// What btManifoldResult::addContactPoint computes per point from the two
+// objects alone: computed once per pair and frame, not once per point.
+struct Material {
+    btScalar friction, restitution, rolling, spinning, damping = 0, stiffness = 0;
+    int flags = 0;
+};
+
+Material material_of(const btCollisionObject *o0, const btCollisionObject *o1)
 {
-    const btVector3 point_a = c.point_on_b + c.normal_on_b * c.distance;
-    const btCollisionObject *ma = swapped ? o1 : o0, *mb = swapped ? o0 : o1;
-    btManifoldPoint p(ma->getWorldTransform().invXform(point_a), mb->getWorldTransform().invXform(c.point_on_b),
-                      c.normal_on_b, c.distance);
-    p.m_positionWorldOnA = point_a;
-    p.m_positionWorldOnB = c.point_on_b;
-    p.m_combinedFriction = gCalculateCombinedFrictionCallback(o0, o1);
-    p.m_combinedRestitution = gCalculateCombinedRestitutionCallback(o0, o1);
-    p.m_combinedRollingFriction = gCalculateCombinedRollingFrictionCallback(o0, o1);
-    p.m_combinedSpinningFriction = gCalculateCombinedSpinningFrictionCallback(o0, o1);
+    Material m;
+    m.friction = gCalculateCombinedFrictionCallback(o0, o1);
+    m.restitution = gCalculateCombinedRestitutionCallback(o0, o1);
+    m.rolling = gCalculateCombinedRollingFrictionCallback(o0, o1);
+    m.spinning = gCalculateCombinedSpinningFrictionCallback(o0, o1);
     const int flags = o0->getCollisionFlags() | o1->getCollisionFlags();
     if (flags & btCollisionObject::CF_HAS_CONTACT_STIFFNESS_DAMPING) {
-        p.m_combinedContactDamping1 = gCalculateCombinedContactDampingCallback(o0, o1);
-        p.m_combinedContactStiffness1 = gCalculateCombinedContactStiffnessCallback(o0, o1);
-        p.m_contactPointFlags |= BT_CONTACT_FLAG_CONTACT_STIFFNESS_DAMPING;
+        m.damping = gCalculateCombinedContactDampingCallback(o0, o1);
+        m.stiffness = gCalculateCombinedContactStiffnessCallback(o0, o1);
+        m.flags |= BT_CONTACT_FLAG_CONTACT_STIFFNESS_DAMPING;
     }
-    if (flags & btCollisionObject::CF_HAS_FRICTION_ANCHOR) p.m_contactPointFlags |= BT_CONTACT_FLAG_FRICTION_ANCHOR;
+    if (flags & btCollisionObject::CF_HAS_FRICTION_ANCHOR) m.flags |= BT_CONTACT_FLAG_FRICTION_ANCHOR;
+    return m;
+}
+
+// The point btManifoldResult::addContactPoint would build, with the feature
+// keys in the part ids (body 0 / body 1 of the manifold).
+btManifoldPoint make_point(const btTransform &t0, const btTransform &t1, bool swapped, int index0, int index1,
+                           const Material &mat, const PairContact &c)
+{
+    const btVector3 point_a = c.point_on_b + c.normal_on_b * c.distance;
+    const btTransform &ta = swapped ? t1 : t0, &tb = swapped ? t0 : t1;
+    btManifoldPoint p(ta.invXform(point_a), tb.invXform(c.point_on_b), c.normal_on_b, c.distance);
+    p.m_positionWorldOnA = point_a;
+    p.m_positionWorldOnB = c.point_on_b;
+    p.m_combinedFriction = mat.friction;
+    p.m_combinedRestitution = mat.restitution;
+    p.m_combinedRollingFriction = mat.rolling;
+    p.m_combinedSpinningFriction = mat.spinning;
+    p.m_combinedContactDamping1 = mat.damping;
+    p.m_combinedContactStiffness1 = mat.stiffness;
+    p.m_contactPointFlags |= mat.flags;
     btPlaneSpace1(p.m_normalWorldOnB, p.m_lateralFrictionDir1, p.m_lateralFrictionDir2);
     p.m_partId0 = swapped ? c.feature_b : c.feature_a;
     p.m_partId1 = swapped ? c.feature_a : c.feature_b;
@@ -59,6 +78,7 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
     const bool swapped = m->getBody0() != o0;
     const bool was_empty = m->getNumContacts() == 0;
     const btScalar threshold = m->getContactBreakingThreshold();
+    const Material mat = material_of(o0, o1);
 
     btManifoldPoint fresh[MANIFOLD_CACHE_SIZE];
     int slot_of[MANIFOLD_CACHE_SIZE];  // cached slot matched by fresh[i], or -1
@@ -66,7 +86,8 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
     int n = 0;
     for (int i = 0; i < count; i++) {
         if (points[i].distance > threshold) continue;
-        fresh[n] = make_point(o0, o1, swapped, w0->m_index, w1->m_index, points[i]);
+        fresh[n] = make_point(o0->getWorldTransform(), o1->getWorldTransform(), swapped, w0->m_index, w1->m_index,
+                              mat, points[i]);
         slot_of[n] = -1;
         for (int s = 0; s < m->getNumContacts(); s++) {
             if (!slot_used[s] && same_key(m->getContactPoint(s), fresh[n])) {
@@ -77,36 +98,50 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
         }
         n++;
     }
+    // A contact whose features changed but which did not move (a corner that
+    // slid past its neighbour's edge turns from vertex-face into edge-edge)
+    // is the same contact for the solver: it takes the nearest unmatched
+    // cached point within Bullet's own matching radius (the breaking
+    // threshold, on the point on B, as getCacheEntry does). This also keeps a
+    // point kept below from being doubled by its successor.
+    for (int i = 0; i < n; i++) {
+        if (slot_of[i] >= 0) continue;
+        btScalar best = threshold * threshold;
+        for (int s = 0; s < m->getNumContacts(); s++) {
+            if (slot_used[s]) continue;
+            const btScalar d2 = (m->getContactPoint(s).m_localPointB - fresh[i].m_localPointB).length2();
+            if (d2 < best) {
+                best = d2;
+                slot_of[i] = s;
+            }
+        }
+        if (slot_of[i] >= 0) slot_used[slot_of[i]] = true;
+    }
 
-    // Same features: replace in place, impulses and lifetime carried over.
+    // Matched: replaced in place, impulses and lifetime carried over.
     for (int i = 0; i < n; i++)
         if (slot_of[i] >= 0) m->replaceContactPoint(fresh[i], slot_of[i]);
-    // New features: first into the slots of features that are gone (fresh
-    // warm-start state, user data released), then appended.
+    // New points: appended while there is room, then into the slots of cached
+    // points not reported this frame (fresh warm-start state, user data
+    // released). Unreported points that keep their slot stay, as in Bullet's
+    // own manifolds, until refreshContactPoints (which the algorithm calls
+    // next) finds them separated or slid beyond the threshold: Minko reports
+    // one clipped face, and a hull resting on two nearly coplanar triangles
+    // alternates between them; dropping the other triangle's corner every
+    // frame restarted its impulse and kept the hull rocking.
     int free_slot = 0;
     for (int i = 0; i < n; i++) {
         if (slot_of[i] >= 0) continue;
-        while (free_slot < m->getNumContacts() && slot_used[free_slot]) free_slot++;
-        if (free_slot < m->getNumContacts()) {
-            m->clearUserCache(m->getContactPoint(free_slot));
-            m->getContactPoint(free_slot) = fresh[i];
-            slot_used[free_slot] = true;
-            slot_of[i] = free_slot;
-        } else {
+        if (m->getNumContacts() < MANIFOLD_CACHE_SIZE) {
             slot_of[i] = m->addManifoldPoint(fresh[i]);
             slot_used[slot_of[i]] = true;
+            continue;
         }
-    }
-    // Features that are gone and whose slot was not reused. removeContactPoint
-    // moves the last point into the hole: follow it.
-    for (int s = m->getNumContacts() - 1; s >= 0; s--) {
-        if (slot_used[s]) continue;
-        const int last = m->getNumContacts() - 1;
-        m->removeContactPoint(s);
-        if (last == s) continue;
-        slot_used[s] = slot_used[last];
-        for (int i = 0; i < n; i++)
-            if (slot_of[i] == last) slot_of[i] = s;
+        while (slot_used[free_slot]) free_slot++;  // n <= 4 fresh points: a free slot exists
+        m->clearUserCache(m->getContactPoint(free_slot));
+        m->getContactPoint(free_slot) = fresh[i];
+        slot_used[free_slot] = true;
+        slot_of[i] = free_slot;
     }
 
     if (gContactAddedCallback && ((o0->getCollisionFlags() | o1->getCollisionFlags()) &

@@ -20,10 +20,14 @@
 // friction / restitution / rolling / spinning friction and contact
 // stiffness-damping through Bullet's gCalculateCombined*Callback hooks,
 // friction anchors, btPlaneSpace1 friction directions, gContactAddedCallback
-// (with CF_CUSTOM_MATERIAL_CALLBACK) and gContactStartedCallback. A cached
-// point whose features are not reported this frame is removed (the manifold
-// is the whole contact), reusing its slot for a new point first so no
-// spurious gContactEndedCallback fires; new points start with zero impulses.
+// (with CF_CUSTOM_MATERIAL_CALLBACK) and gContactStartedCallback. A point
+// whose features changed but not its place (within the breaking threshold of
+// a cached point that matched nothing, as Bullet's getCacheEntry) keeps that
+// point's impulses. New points start with zero impulses, appended while the
+// manifold has room, then in the slots of cached points not reported this
+// frame; cached points that keep their slot stay, as in Bullet's own
+// manifolds, for the caller's refreshContactPoints to drop once they
+// separate or slide beyond the threshold.
 #ifndef MINKO_BULLET_CONTACT_WRITER_H
 #define MINKO_BULLET_CONTACT_WRITER_H
 

@@ -167,6 +167,15 @@ struct WriterRig {
         r.setPersistentManifold(&manifold);
         mkb::write_contacts(&r, c, n);
     }
+    // A moved by `up` along the contacts' normal (+y) from pose `rest`.
+    void move_a(const btTransform &rest, btScalar up)
+    {
+        ta = rest;
+        ta.getOrigin() += btVector3(0, up, 0);
+        a.setWorldTransform(ta);
+    }
+    // What the algorithm does after writing.
+    void refresh() { manifold.refreshContactPoints(manifold.getBody0()->getWorldTransform(), manifold.getBody1()->getWorldTransform()); }
     // The manifold point carrying feature fa of A (-1 if none).
     int slot_of(int fa)
     {
@@ -287,8 +296,11 @@ int g_started = 0, g_ended = 0;
 void on_started(btPersistentManifold *const &) { g_started++; }
 void on_ended(btPersistentManifold *const &) { g_ended++; }
 
-// Gone features leave, new ones start cold, and the started / ended callbacks
-// fire once per touching episode, never in between.
+// Features that are not reported stay while they still touch, as in
+// Bullet's own manifolds, and leave through refreshContactPoints once they
+// separate; new ones start cold in free room first, then in the slots of
+// unreported points; the started / ended callbacks fire once per touching
+// episode, never in between.
 START_TEST(writer_gone_new_and_callbacks)
 {
     ContactStartedCallback old_started = gContactStartedCallback;
@@ -297,37 +309,75 @@ START_TEST(writer_gone_new_and_callbacks)
     gContactEndedCallback = on_ended;
     g_started = g_ended = 0;
     WriterRig rig(false);
+    const btTransform rest = rig.ta;
     mkb::PairContact c[4] = {contact(-1, -1, btScalar(-0.01), 1, 1), contact(1, -1, btScalar(-0.01), 2, 2),
                              contact(1, 1, btScalar(-0.01), 3, 3), contact(-1, 1, btScalar(-0.01), 4, 4)};
-    rig.write(c, 4);
+    rig.write(c, 3);
+    ck_assert_int_eq(rig.manifold.getNumContacts(), 3);
+    rig.write(c, 4);  // 4 is new and there is room: appended
+    ck_assert_int_eq(rig.manifold.getNumContacts(), 4);
     for (int f = 1; f <= 4; f++) rig.manifold.getContactPoint(rig.slot_of(f)).m_appliedImpulse = btScalar(f);
-    // Frame 2: 2 and 3 stay, 1 and 4 are gone, 5 is new; one point beyond the
-    // breaking threshold is dropped.
+    // Frame 2: 2 and 3 stay, 1 and 4 are not reported, 5 is new and takes
+    // the slot of 1; one point beyond the breaking threshold is dropped. 4
+    // still touches and keeps its slot and impulse.
     mkb::PairContact d[4] = {contact(1, -1, btScalar(-0.01), 2, 2), contact(0, 0, btScalar(0.5), 6, 6),
                              contact(1, 1, btScalar(-0.01), 3, 3), contact(0, 1, btScalar(0.01), 5, 5)};
     rig.write(d, 4);
-    ck_assert_int_eq(rig.manifold.getNumContacts(), 3);
+    ck_assert_int_eq(rig.manifold.getNumContacts(), 4);
     ck_assert_int_eq(rig.slot_of(1), -1);
-    ck_assert_int_eq(rig.slot_of(4), -1);
     ck_assert_int_eq(rig.slot_of(6), -1);
     MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(2)).m_appliedImpulse, 2, 0);
     MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(3)).m_appliedImpulse, 3, 0);
+    MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(4)).m_appliedImpulse, 4, 0);
     MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(5)).m_appliedImpulse, 0, 0);
     ck_assert_int_eq(rig.manifold.getContactPoint(rig.slot_of(5)).getLifeTime(), 0);
-    // Frame 3: only 5 is left (slots move under removal).
+    // Frame 3: A lifts by 0.035 along the normal and only 5 is reported (at
+    // its new distance); refresh drops 2, 3 and 4, now 0.025 apart, beyond
+    // the breaking threshold of 0.02.
+    rig.move_a(rest, btScalar(0.035));
+    d[3].distance = btScalar(0.015);
     rig.write(&d[3], 1);
+    rig.refresh();
     ck_assert_int_eq(rig.manifold.getNumContacts(), 1);
     ck_assert_int_eq(rig.slot_of(5), 0);
     ck_assert_int_eq(g_started, 1);
     ck_assert_int_eq(g_ended, 0);
     // Frame 4: separated; frame 5: touching again.
+    rig.move_a(rest, btScalar(0.1));
     rig.write(nullptr, 0);
+    rig.refresh();
     ck_assert_int_eq(rig.manifold.getNumContacts(), 0);
     ck_assert_int_eq(g_ended, 1);
+    rig.move_a(rest, 0);
     rig.write(c, 2);
     ck_assert_int_eq(g_started, 2);
     gContactStartedCallback = old_started;
     gContactEndedCallback = old_ended;
+}
+END_TEST
+
+// A contact whose features change while it stays in place (a corner sliding
+// past an edge: vertex-face becomes edge-edge) keeps its impulses under its
+// new key; one that moves farther than the breaking threshold starts cold.
+START_TEST(writer_moved_feature_keeps_impulse)
+{
+    WriterRig rig(false);
+    mkb::PairContact c[2] = {contact(-1, 0, btScalar(-0.01), 1, 1), contact(1, 0, btScalar(-0.01), 2, 2)};
+    rig.write(c, 2);
+    rig.manifold.getContactPoint(rig.slot_of(1)).m_appliedImpulse = 1;
+    rig.manifold.getContactPoint(rig.slot_of(2)).m_appliedImpulse = 2;
+    mkb::PairContact d[2] = {contact(btScalar(-1.005), 0, btScalar(-0.01), 7, 7),
+                             contact(btScalar(1.5), 0, btScalar(-0.01), 8, 8)};
+    rig.write(d, 2);
+    ck_assert_int_eq(rig.slot_of(1), -1);
+    ck_assert_int_ge(rig.slot_of(7), 0);
+    ck_assert_int_ge(rig.slot_of(8), 0);
+    MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(7)).m_appliedImpulse, 1, 0);
+    MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(7)).m_positionWorldOnB.x(), -1.005, 1e-6);
+    MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(8)).m_appliedImpulse, 0, 0);
+    // 2 was not reported and still touches: it stays beside its far successor.
+    MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(2)).m_appliedImpulse, 2, 0);
+    ck_assert_int_eq(rig.manifold.getNumContacts(), 3);
 }
 END_TEST
 
@@ -1437,6 +1487,7 @@ Suite *suite()
     tcase_add_test(w, writer_matches_add_contact_point);
     tcase_add_test(w, writer_impulses_follow_features);
     tcase_add_test(w, writer_gone_new_and_callbacks);
+    tcase_add_test(w, writer_moved_feature_keeps_impulse);
     tcase_add_test(w, writer_mesh_parts_left_to_bullet);
     suite_add_tcase(s, w);
     TCase *b = tcase_create("broadphase");
