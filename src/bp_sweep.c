@@ -30,12 +30,22 @@
 #define MK_SWEEP_Q_MAX_ 0xFFFFu
 #define MK_SWEEP_ROWS_ 0xFFFFu     /* 16-bit row numbers */
 
+/* The frame of one sweep: axes, quantisation of the sweep axis, rows. */
+typedef struct frame_ {
+    int ax, ay;           /* sweep axis, row axis */
+    double x0, xscale;    /* q(x) = floor((x - x0) * xscale), clamped */
+    double y0, inv_h;     /* row(y) = floor((y - y0) * inv_h), clamped */
+    double h;             /* row height: at least every box's extent on ay */
+} frame_;
+
 struct mk_sweep {
     uint64_t *key, *tmp;  /* sort keys: row << 40 | q(lo) << 24 | slot */
     uint32_t *qhi;        /* per sorted box: q(hi) on the sweep axis */
     mk_aabb *box;         /* per sorted box: its AABB (sequential reads in the sweep) */
     uint32_t *big;        /* slots of boxes infinite on the row axis */
     int cap;
+    frame_ f;             /* of the last sweep, with its n sorted and nbig big boxes: */
+    int n, nbig;          /* region queries after a stateless update read them */
 };
 
 static size_t sweep_bytes_per_proxy(void)
@@ -81,13 +91,6 @@ static int in_structure(const mk_bp *bp, uint32_t s)
 
 static double lo_of(const mk_aabb *b, int axis) { return (double)(&b->lo.x)[axis]; }
 static double hi_of(const mk_aabb *b, int axis) { return (double)(&b->hi.x)[axis]; }
-
-/* The frame of one sweep: axes, quantisation of the sweep axis, rows. */
-typedef struct frame_ {
-    int ax, ay;           /* sweep axis, row axis */
-    double x0, xscale;    /* q(x) = floor((x - x0) * xscale), clamped */
-    double y0, inv_h;     /* row(y) = floor((y - y0) * inv_h), clamped */
-} frame_;
 
 /* Monotone in x, so q(lo_b) > q(hi_a) implies lo_b > hi_a. */
 static uint32_t quantise(const frame_ *f, double x)
@@ -169,6 +172,7 @@ static void plan(const mk_bp *bp, frame_ *f)
     hmax *= 1.0 + 1.0 / 1024;
     if (hmax < (yhi - ylo) / (MK_SWEEP_ROWS_ - 1)) hmax = (yhi - ylo) / (MK_SWEEP_ROWS_ - 1);
     f->y0 = ylo <= yhi ? ylo : 0;
+    f->h = hmax;
     f->inv_h = hmax > 0 ? 1.0 / hmax : 0;
     if (!(f->inv_h <= 1e300)) f->inv_h = 0; /* a subnormal height: one row */
 }
@@ -285,6 +289,9 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
     if (!bp->sweep && (st = sweep_create(bp)) != MK_OK) return st;
     plan(bp, &f);
     n = sort_keys(bp, &f, &nbig);
+    bp->sweep->f = f;
+    bp->sweep->n = n;
+    bp->sweep->nbig = nbig;
     c.bp = bp; c.w = bp->sweep; c.report = report;
     for (s = 0; s < n; s = e) {
         uint64_t row = c.w->key[s] >> 40;
@@ -296,4 +303,40 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
         if ((st = sweep_rows(&c, s, e, e, u)) != MK_OK) return st;
     }
     return sweep_big(&c, n, nbig);
+}
+
+/* First sorted index in [i, n) whose row is at least `row`. */
+static int row_start(const struct mk_sweep *w, int i, uint64_t row)
+{
+    int hi = w->n;
+    while (i < hi) {
+        int mid = i + (hi - i) / 2;
+        if (w->key[mid] >> 40 < row) i = mid + 1;
+        else hi = mid;
+    }
+    return i;
+}
+
+/* The rows that can hold a box overlapping q (a box starts at most h below
+ * q.lo on the row axis), each scanned from its start while its boxes start
+ * before q ends on the swept axis; then the big boxes. */
+void mk_sweep_query_(const mk_bp *bp, mk_aabb q, mk_bp_query_fn fn, void *ctx)
+{
+    const struct mk_sweep *w = bp->sweep;
+    const frame_ *f = &w->f;
+    uint64_t row = row_of(f, lo_of(&q, f->ay) - f->h), last = row_of(f, hi_of(&q, f->ay));
+    uint32_t qx = quantise(f, hi_of(&q, f->ax));
+    int i = row_start(w, 0, row), j;
+    while (i < w->n && w->key[i] >> 40 <= last) {
+        row = w->key[i] >> 40;
+        for (; i < w->n && w->key[i] >> 40 == row && qlo_at(w, i) <= qx; ++i) {
+            uint32_t s = slot_at(w, i);
+            if (mk_bp_overlap_(&w->box[i], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
+        }
+        i = row_start(w, i, row + 1);
+    }
+    for (j = 0; j < w->nbig; ++j) {
+        uint32_t s = w->big[j];
+        if (mk_bp_overlap_(&bp->box[s], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
+    }
 }

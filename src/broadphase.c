@@ -417,6 +417,7 @@ mk_status mk_bp_update(mk_bp *bp)
     sweeps = bp->sweeps;
     st = run_structure(bp);
     if (rebuild && sweeps == bp->sweeps) bp->full_rebuilds++;
+    bp->swept = st == MK_OK && sweeps != bp->sweeps;
     if (st != MK_OK) {
         /* Whatever was missed is recounted next time; the pairs of destroyed
          * proxies go now, since their slots are about to be reused. */
@@ -472,6 +473,7 @@ static void query(const mk_bp *bp, mk_aabb box, mk_bp_query_fn fn, void *ctx)
 {
     query_ctx_ q;
     q.bp = bp; q.fn = fn; q.ctx = ctx;
+    if (bp->swept) { mk_sweep_query_(bp, box, skip_dying, &q); return; }
     if (bp->rebuild || bp->kind == MK_BP_BRUTE) { brute_query(bp, box, skip_dying, &q); return; }
 #if !defined(MK_WITHOUT_SAP)
     if (bp->kind == MK_BP_SAP) { mk_sap_query_(bp, box, skip_dying, &q); return; }

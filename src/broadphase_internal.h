@@ -76,6 +76,7 @@ struct mk_bp {
     int rebuild;              /* the structure must be rebuilt from scratch */
     int switches, full_rebuilds;
     int sweeps;               /* updates answered by the stateless sweep */
+    int swept;                /* the last update was one of them: queries read the sweep */
     int frames_since_choice;
     int rebuilds_at_choice, sweeps_at_choice; /* AUTO: full_rebuilds and sweeps when it last chose */
     double moved_share, far_share;  /* AUTO: smoothed motion statistics */
@@ -147,6 +148,9 @@ void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte);
  * first use. O(n) + one radix sort + the boxes met in the sweep. */
 mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b));
 void mk_sweep_destroy_(mk_bp *bp);
+/* Region query on the boxes of the last mk_sweep_pairs_ (after a stateless
+ * update): O(log n + boxes in the rows q spans that start before q ends). */
+void mk_sweep_query_(const mk_bp *bp, mk_aabb q, mk_bp_query_fn fn, void *ctx);
 
 /* ---- structures ---- */
 mk_status mk_brute_update_(mk_bp *bp);

@@ -520,9 +520,15 @@ START_TEST(region_and_ray_queries)
         w.o[i].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)0.1);
     }
     add_obj(&w, mk_aabb_make(mk_v3(-(mk_real)INFINITY, -(mk_real)INFINITY, -(mk_real)INFINITY), mk_v3((mk_real)INFINITY, (mk_real)INFINITY, -1)), 1);
-    for (f = 0; f < 12; ++f) {
-        for (i = 0; i < 300; ++i) if (w.o[i].alive && !w.o[i].is_static) drift(&w, i, 1);
+    for (f = 0; f < 16; ++f) {
+        for (i = 0; i < 300; ++i) {
+            if (!w.o[i].alive || w.o[i].is_static) continue;
+            /* from frame 8 on, teleports: pairs_only SAP answers by stateless sweeps */
+            if (f >= 8 && mk_rng_unit(&w.rng) < 0.3) move_obj(&w, i, box_at(mk_rng_v3(&w.rng, 0, 20), mk_aabb_extents(w.o[i].box)));
+            else drift(&w, i, 1);
+        }
         if (f == 5) kill_obj(&w, 7);
+        if (f == 12) kill_obj(&w, 9);
         step(&w, f);
         for (q = 0; q < 20; ++q) {
             mk_aabb box = q == 0 ? mk_aabb_make(mk_v3(-1e9, -1e9, -1e9), mk_v3(1e9, 1e9, 1e9)) : random_box(&w.rng, 20, 0.1, 8);
@@ -558,6 +564,11 @@ START_TEST(region_and_ray_queries)
                 }
             }
         }
+    }
+    if (w.bp[K_SAP_SET]) {
+        mk_bp_stats st;
+        MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[K_SAP_SET], &st), MK_OK);
+        ck_assert_int_gt(st.sweeps, 0);
     }
     world_fini(&w);
 }

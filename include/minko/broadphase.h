@@ -9,7 +9,11 @@
  * pairs and pairs the filter rejects. After an update, mk_bp_pairs() gives the
  * whole set sorted by (a, b) with a < b, and mk_bp_added()/mk_bp_removed()
  * give the changes since the previous update, also sorted: replaying them on
- * the previous set gives the new one. Three structures sit behind one API and
+ * the previous set gives the new one. A caller that reads only the set says
+ * so (mk_bp_def.pairs_only): it gets no events (their counts stay 0), and SAP
+ * may then answer an incoherent update with a stateless sort and sweep that
+ * writes the set directly, skipping its pair table; the set is the same
+ * exact, sorted set either way. Three structures sit behind one API and
  * give identical sets: brute force (the oracle), incremental sweep and prune,
  * and a hierarchical hash grid; MK_BP_AUTO picks one from scene statistics and
  * mk_bp_stats() says which. AABBs may have infinite sides (ground planes) but
@@ -30,10 +34,21 @@
  *                moves past the endpoints between its old and new place. Loses
  *                when many endpoints crowd one axis (large n, boxes lined up,
  *                every box crossing thousands of others per frame) or motion
- *                is incoherent; it then falls back to a full sort and a sweep
- *                on the axis of largest spread, O(n log n + overlaps in 1-D).
- *                Statics sit in its axes like everyone else. Region query
- *                O(log n + proxies in the x slab).
+ *                is incoherent; past a swap budget it falls back to a full
+ *                sort of its axes and a stateless sweep for the pairs. With
+ *                pairs_only it answers such updates by the sweep alone (no
+ *                pair table, no events) until the scene is calm again (fewer
+ *                than half the proxies changed), then rebuilds. The sweep
+ *                (every update from scratch, no state): the axis of largest
+ *                spread is swept, the next one cut into rows as tall as the
+ *                tallest box, one radix sort of n keys, and each box meets
+ *                the boxes of its own and the next row that overlap it on
+ *                the swept axis: O(n + those meetings + p log p); a box
+ *                infinite across the rows (a plane) meets every box, O(n);
+ *                statics are sorted every time too. Statics sit in SAP's
+ *                axes like everyone else. Region query O(log n + proxies in
+ *                the x slab); after a stateless update, O(log n + the boxes
+ *                of the rows the query spans that start before it ends).
  *   hash grid    update O(d + candidates with a moved member + cell changes
  *                + static look-ups): candidates are pairs of non-static
  *                proxies sharing a cell, kept across frames; a candidate's
@@ -105,10 +120,10 @@ typedef enum mk_bp_filter_mode {
 /* Return nonzero to keep the pair. Called when a pair starts to overlap (not
  * every frame), when a proxy's filter words change, and again for every pair
  * after a structure rebuild (AUTO switch, recovery from a failed update);
- * brute force, the plain oracle, asks again every update for overlapping
- * pairs it was refused. Called from inside mk_bp_update(), so it must not
- * call back into bp; a filter that changes its mind must say so through
- * mk_bp_set_filter(). */
+ * brute force, the plain oracle, and SAP's stateless updates (pairs_only)
+ * ask again for every overlapping pair they meet. Called from inside
+ * mk_bp_update(), so it must not call back into bp; a filter that changes its
+ * mind must say so through mk_bp_set_filter(). */
 typedef int (*mk_bp_pair_filter)(void *ctx, mk_bp_id a, void *user_a, mk_bp_id b, void *user_b);
 
 typedef struct mk_bp_def {
