@@ -334,8 +334,9 @@ static void observe_motion(mk_bp *bp)
  *  - few movers (under ~100, or under 5% with few statics): SAP, which
  *    costs nothing when nothing moved (Bullet's 1000-box stack at rest:
  *    0.036 ms a step against the grid's 0.072);
- *  - many movers (over 20%): the grid (uniform, mixed, wall, churn: 1.1 to
- *    2.5 ms against SAP's 3.1 to 7.0);
+ *  - many movers (over 20%), or over ~100 among mostly statics: the grid
+ *    (uniform, mixed, wall, churn: 1.1 to 2.5 ms against SAP's 3.1 to 7.0;
+ *    static: 0.4 ms against 4.2);
  *  - in between, the structure in use stays: a switch costs a rebuild. */
 static mk_bp_kind auto_choice(const mk_bp *bp, int sap_lost_coherence)
 {
@@ -346,7 +347,7 @@ static mk_bp_kind auto_choice(const mk_bp *bp, int sap_lost_coherence)
     if (bp->far_share >= 0.02 || sap_lost_coherence)
         return bp->def.pairs_only && few_statics ? MK_BP_SAP : MK_BP_HGRID;
     if (dynamic <= 96 || movers <= 96 || (bp->moved_share < 0.05 && few_statics)) return MK_BP_SAP;
-    if (bp->moved_share > 0.2) return MK_BP_HGRID;
+    if (bp->moved_share > 0.2 || !few_statics) return MK_BP_HGRID;
     return bp->kind == MK_BP_BRUTE ? MK_BP_SAP : bp->kind;
 }
 
@@ -363,12 +364,8 @@ static void auto_choose(mk_bp *bp)
         return;
     }
     bp->frames_since_choice++;
-    /* One full sort is the rebuild after a switch; more, or stateless
-     * sweeps, mean the insertion sorts lost coherence. */
-    want = auto_choice(bp, bp->kind == MK_BP_SAP && (bp->full_rebuilds - bp->rebuilds_at_choice > 1 ||
-                                                     bp->sweeps > bp->sweeps_at_choice));
-    bp->rebuilds_at_choice = bp->full_rebuilds;
-    bp->sweeps_at_choice = bp->sweeps;
+    want = auto_choice(bp, bp->kind == MK_BP_SAP && bp->sap_losses > bp->losses_at_choice);
+    bp->losses_at_choice = bp->sap_losses;
     if (want == bp->kind) return;
     destroy_structures(bp);
     bp->kind = want;

@@ -78,7 +78,8 @@ struct mk_bp {
     int sweeps;               /* updates answered by the stateless sweep */
     int swept;                /* the last update was one of them: queries read the sweep */
     int frames_since_choice;
-    int rebuilds_at_choice, sweeps_at_choice; /* AUTO: full_rebuilds and sweeps when it last chose */
+    int sap_losses;           /* SAP: updates whose swaps ran over budget (lost coherence) */
+    int losses_at_choice;     /* AUTO: sap_losses when it last chose */
     double moved_share, far_share;  /* AUTO: smoothed motion statistics */
     struct mk_sap *sap;
     struct mk_hgrid *grid;

@@ -376,13 +376,15 @@ static long long swap_budget(const mk_bp *bp)
 #define MK_SAP_MAX_WAIT_ 64
 
 /* pairs_only, with stale arrays: go on with stateless sweeps, or rebuild
- * and try insertion sorts again? Again once the wait is over and the scene
- * is calm (fewer than half the proxies changed): a rebuild costs a few
- * sweeps, and a busy scene (ODE's exploding heap) would only lose again. A
- * scene that stays busy is retried every 4 * MK_SAP_MAX_WAIT_ updates. */
+ * and try insertion sorts? First, before they ever lost: rebuild. Then
+ * again once the wait is over and the scene is calm (fewer than half the
+ * proxies changed): a rebuild costs a few sweeps, and a busy scene (ODE's
+ * exploding heap) would only lose again. A scene that stays busy is
+ * retried every 4 * MK_SAP_MAX_WAIT_ updates. */
 static int keep_sweeping(mk_bp *bp)
 {
     struct mk_sap *s = bp->sap;
+    if (s->sweep_backoff == 0) return 0; /* never lost: insertion sorts get their chance */
     if (s->sweep_wait > 0) {
         s->sweep_wait--;
         return 1;
@@ -397,6 +399,7 @@ static int keep_sweeping(mk_bp *bp)
 static mk_status lost_coherence(mk_bp *bp)
 {
     struct mk_sap *s = bp->sap;
+    bp->sap_losses++;
     if (!bp->def.pairs_only) {
         bp->full_rebuilds++;
         return rebuild(bp);
