@@ -69,11 +69,12 @@ typedef struct mk_gjk_result {
 /* 2 / |q|^2 for a quaternion accepted by the pose check (e = |q|^2 - 1 within
  * MK_QUAT_TOLERANCE): 2 (1 - e + e^2) is off by 2 e^3, below the rounding of
  * either precision (2e-18 in double, 2e-12 in float), and it keeps a division
- * off the head of every query's dependency chain. */
+ * off the head of every query's dependency chain; summed as (2 - 2e) + e 2e,
+ * its two terms are formed side by side rather than nested. */
 MK_ALWAYS_INLINE mk_real mk_two_over_len2(mk_quat q)
 {
-    mk_real e = mk_quat_len2(q) - 1;
-    return 2 * (1 - e * (1 - e));
+    mk_real e = mk_quat_len2(q) - 1, e2 = e + e;
+    return (2 - e2) + e * e2;
 }
 
 /* Rotation matrix of a quaternion that is unit only to within
