@@ -946,6 +946,7 @@ void usage(const char *argv0)
                  "  --steps N    override every scene's step count\n"
                  "  --trials N   run each scene N times, starts perturbed by 1e-3 of each body's size\n"
                  "               from the second on; every figure is the median over the trials\n"
+                 "  --per-trial  also print every trial's row (backend#trial; the table only)\n"
                  "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n",
                  argv0);
 }
@@ -954,7 +955,7 @@ void usage(const char *argv0)
 
 int main(int argc, char **argv)
 {
-    bool quick = false, list = false, no_native = false;
+    bool quick = false, list = false, no_native = false, per_trial = false;
     const char *json = nullptr;
     int steps_override = 0, trials = 1;
     std::vector<std::string> only_scenes, only_backends;
@@ -969,6 +970,7 @@ int main(int argc, char **argv)
         else if (a == "--backend" && i + 1 < argc) only_backends.push_back(argv[++i]);
         else if (a == "--steps" && i + 1 < argc) steps_override = std::atoi(argv[++i]);
         else if (a == "--trials" && i + 1 < argc) trials = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--per-trial") per_trial = true;
         else if (a == "--bp" && i + 1 < argc) {
             std::string k = argv[++i];
             g_bp_kind = k == "sap" ? MK_BP_SAP : k == "hgrid" ? MK_BP_HGRID : k == "brute" ? MK_BP_BRUTE : MK_BP_AUTO;
@@ -1033,6 +1035,13 @@ int main(int argc, char **argv)
                         r.divergence = std::max(r.divergence, (double)(r.end_pos[i] - native.end_pos[i]).length());
                 }
         }
+        if (per_trial)
+            for (size_t k = 0; k < picked.size(); k++)
+                for (int t = 0; t < trials; t++) {
+                    Result r = per_backend[k][(size_t)t];
+                    r.backend += "#" + std::to_string(t);
+                    print_row(scene, r, per_backend[0][(size_t)t]);
+                }
         Result native;
         for (size_t k = 0; k < picked.size(); k++) {
             Result r = median_of(per_backend[k]);
