@@ -356,8 +356,9 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     mk_box_hull va, vb;
     const mk_hull *ha = a->u.hull, *hb = b->u.hull;
     int boxes = a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX;
-    opt.prefer_abs = MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
-                                                b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
+    opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0
+                                               : MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
+                                                                            b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
     if (boxes) {
         mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p->r, p->t, &opt, &sat);
         if (sat.kind == MK_SAT_EDGES) box_face_axis(p, &sat);

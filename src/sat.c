@@ -400,6 +400,17 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
         box_edge_axis(r, ar, a, b, d, 2, 2, &c.edges);
         if (c.edges.sep > c.stop) c.stopped = 1;
     }
+    if (c.face_a.sep > c.stop) {
+        /* Apart along a face of A, the common early stop: that axis alone. */
+        i = c.face_a.a;
+        out->kind = MK_SAT_FACE_A;
+        out->a = 2 * i + (d[i] >= 0);
+        out->b = -1;
+        out->best = out->separation = c.face_a.sep;
+        out->normal = mk_v3(i == 0 ? (d[0] >= 0 ? 1 : -1) : 0, i == 1 ? (d[1] >= 0 ? 1 : -1) : 0, i == 2 ? (d[2] >= 0 ? 1 : -1) : 0);
+        out->complete = 0;
+        return;
+    }
     /* The normals and feature indices of the kinds' winners. */
     i = c.face_a.a;
     c.face_a.n = mk_v3(i == 0 ? (d[0] >= 0 ? 1 : -1) : 0, i == 1 ? (d[1] >= 0 ? 1 : -1) : 0, i == 2 ? (d[2] >= 0 ? 1 : -1) : 0);
