@@ -57,6 +57,15 @@ typedef struct mk_sat_options {
      * reported separation is below it by at most band. */
     mk_sat_kind prefer;
     mk_real prefer_rel, prefer_abs;
+    /* An axis to test before all others, named as mk_sat_result names one
+     * (kind, a, b), usually the one that separated the pair last frame:
+     * when it separates by more than stop_above the search ends there and
+     * reports it, so a pair that stays apart costs one axis instead of up
+     * to every face (a hull pair of 32 points apart: 1.4k instructions per
+     * mk_collide instead of 10k); otherwise the answer is exactly the one
+     * without it. MK_SAT_NONE (the default): none. */
+    mk_sat_kind first;
+    int first_a, first_b;
 } mk_sat_options;
 
 typedef struct mk_sat_result {

@@ -116,7 +116,8 @@ typedef struct mk_manifold_cache {
     mk_gjk_cache gjk;   /* GJK warm start of pairs without a closed form */
     int reference;      /* internal: 1 / 2 when the last manifold was clipped against a face of A / B */
     mk_feature face;    /* internal: that face */
-    int axis;           /* internal: kind of the last SAT axis of a box or hull pair, 0 = none */
+    int axis;           /* internal: kind of the last SAT axis of a box or hull pair, 0 = none; for a pair
+                         * that was apart, its separating axis (with reference and face) */
 } mk_manifold_cache;
 
 /* The contact manifold of shapes a (pose xa) and b (pose xb). `margin` >= 0:
