@@ -2,7 +2,9 @@
 // one process on the same poses.
 //
 // Backends (each builds the full manifold of every case):
-//   minko                                mk_collide(), with a per-pair mk_manifold_cache
+//   minko                                mk_collide(), with a per-pair mk_manifold_cache (warm: faces
+//                                        preferred within the hysteresis band, manifold.h)
+//   minko.cold                           mk_collide() without a cache: the exact minimum axis
 //   bullet_f64.btBoxBoxDetector          Bullet's port of ODE's dBoxBox, called directly
 //   bullet_f64.btBoxBoxCollisionAlgorithm  what a Bullet world runs per box pair and frame:
 //                                        the detector plus the persistent-manifold update
@@ -11,16 +13,23 @@
 //   stacked  a unit box resting on another, tilted by up to 2 degrees, turned
 //            about the vertical, 0.1 to 50 mm deep: the face contacts of stacking
 //   random   boxes of half-extents 0.1 to 1, random orientations, overlapping
+//   apart    the same boxes separated (up to 0.5) with overlapping world AABBs:
+//            what a broadphase hands over that has no contact; accuracy is
+//            then only "no point reported" (a point is a failure)
 // Per family and backend: ns per query (best of several timed loops over all
-// cases, same pose repeated as in a resting contact), relative error of the
+// cases, same pose repeated as in a resting contact, after one untimed pass
+// that warms every per-pair state; the accuracy columns judge the answers of
+// the pass after it, as timed), relative error of the
 // deepest reported point against the exact SAT depth (long-double oracle,
 // tests/support/oracle.h), angle of the normal against the exact normal,
 // failures (no contact reported for a penetrating pair, or an error status),
 // mean points per manifold. JSON Lines per ../shared/BENCH_FORMAT.md (suite
 // "contacts", case "box_box") plus a table.
 //
-//   bench_contacts [--quick] [--json FILE] [--family stacked|random]
-// (--family runs one case family, e.g. for callgrind instruction counts.)
+//   bench_contacts [--quick] [--json FILE] [--family stacked|random|apart] [--backend NAME]
+// (--family runs one case family, --backend one backend (a prefix of its
+// name: minko, minko.cold, bullet, ode), e.g. for callgrind instruction
+// counts; ratios are then to that backend.)
 
 #include <algorithm>
 #include <cmath>
@@ -64,6 +73,7 @@ struct Answer {
     double depth = 0;     // deepest point's penetration
     double normal[3] = {0, 0, 0};
     bool failed = false;
+    bool error = false;   // an error status (Minko)
 };
 
 struct Backend {
@@ -80,13 +90,34 @@ mk_quat tilt_quat(mk_rng *r, double max_tilt)
     return mk_quat_mul(tilt, yaw);
 }
 
-bool finish_case(Case &c)
+// Half-extents of the world AABB of a box.
+mk_vec3 aabb_half(mk_vec3 h, mk_quat q)
+{
+    mk_mat3 R = mk_mat3_from_quat(q);
+    return mk_v3(std::fabs(R.c0.x) * h.x + std::fabs(R.c1.x) * h.y + std::fabs(R.c2.x) * h.z,
+                 std::fabs(R.c0.y) * h.x + std::fabs(R.c1.y) * h.y + std::fabs(R.c2.y) * h.z,
+                 std::fabs(R.c0.z) * h.x + std::fabs(R.c1.z) * h.y + std::fabs(R.c2.z) * h.z);
+}
+
+bool aabbs_overlap(const Case &c)
+{
+    mk_vec3 ea = aabb_half(c.ha, c.xa.q), eb = aabb_half(c.hb, c.xb.q), d = mk_v3_sub(c.xb.p, c.xa.p);
+    return std::fabs(d.x) <= ea.x + eb.x && std::fabs(d.y) <= ea.y + eb.y && std::fabs(d.z) <= ea.z + eb.z;
+}
+
+bool finish_case(Case &c, bool apart)
 {
     mk_shape a, b;
     mk_oracle_result o;
     mk_shape_box(c.ha, 0, &a);
     mk_shape_box(c.hb, 0, &b);
-    if (mk_oracle_distance(&a, c.xa, &b, c.xb, &o) != 0 || !(o.distance < -1e-6)) return false;
+    if (mk_oracle_distance(&a, c.xa, &b, c.xb, &o) != 0) return false;
+    if (apart) {
+        c.depth = -double(o.distance);
+        c.normal_defined = false;
+        return o.distance > 1e-6 && o.distance < 0.5 && aabbs_overlap(c);
+    }
+    if (!(o.distance < -1e-6)) return false;
     c.depth = -double(o.distance);
     c.normal[0] = double(o.normal.x);
     c.normal[1] = double(o.normal.y);
@@ -115,9 +146,10 @@ std::vector<Case> make_cases(const char *family, int n, uint64_t seed)
             c.hb = mk_rng_v3(&r, 0.1, 1);
             c.xa = mk_transform_make(mk_rng_v3(&r, -10, 10), mk_rng_quat(&r));
             mk_real reach = mk_v3_len(c.ha) + mk_v3_len(c.hb);
-            c.xb = mk_transform_make(mk_v3_mad(c.xa.p, (mk_real)mk_rng_range(&r, 0.1, 0.9) * reach, mk_rng_dir(&r)), mk_rng_quat(&r));
+            double lo = strcmp(family, "apart") ? 0.1 : 0.5, hi = strcmp(family, "apart") ? 0.9 : 1.1;
+            c.xb = mk_transform_make(mk_v3_mad(c.xa.p, (mk_real)mk_rng_range(&r, lo, hi) * reach, mk_rng_dir(&r)), mk_rng_quat(&r));
         }
-        if (finish_case(c)) out.push_back(c);
+        if (finish_case(c, !strcmp(family, "apart"))) out.push_back(c);
     }
     return out;
 }
@@ -127,7 +159,8 @@ std::vector<Case> make_cases(const char *family, int n, uint64_t seed)
 struct MinkoRun {
     std::vector<mk_shape> a, b;
     std::vector<mk_manifold_cache> cache;
-    explicit MinkoRun(const std::vector<Case> &cs) : a(cs.size()), b(cs.size()), cache(cs.size())
+    bool warm;
+    MinkoRun(const std::vector<Case> &cs, bool warm_) : a(cs.size()), b(cs.size()), cache(cs.size()), warm(warm_)
     {
         for (size_t i = 0; i < cs.size(); ++i) {
             mk_shape_box(cs[i].ha, 0, &a[i]);
@@ -138,8 +171,9 @@ struct MinkoRun {
     void query(const std::vector<Case> &cs, size_t i, Answer *ans)
     {
         mk_manifold m;
-        mk_status st = mk_collide(&a[i], cs[i].xa, &b[i], cs[i].xb, 0, &cache[i], &m);
+        mk_status st = mk_collide(&a[i], cs[i].xa, &b[i], cs[i].xb, 0, warm ? &cache[i] : nullptr, &m);
         if (!ans) return;
+        ans->error = st != MK_OK;
         ans->failed = st != MK_OK || m.count == 0;
         if (ans->failed) return;
         ans->count = m.count;
@@ -321,6 +355,7 @@ Backend measure(const char *name, Run &run, const std::vector<Case> &cs, int loo
     Backend be;
     be.name = name;
     be.answers.resize(cs.size());
+    for (size_t i = 0; i < cs.size(); ++i) run.query(cs, i, nullptr);
     for (size_t i = 0; i < cs.size(); ++i) run.query(cs, i, &be.answers[i]);
     be.ns = 1e300;
     for (int l = 0; l < loops; ++l) {
@@ -346,8 +381,13 @@ void report(FILE *jf, const char *family, const std::vector<Case> &cs, const std
         std::vector<double> rel, ang;
         int failures = 0;
         double points = 0;
+        const bool apart = !strcmp(family, "apart");
         for (size_t i = 0; i < cs.size(); ++i) {
             const Answer &a = be.answers[i];
+            if (apart) { // no contact is the right answer: a reported point (or an error) is the failure
+                failures += a.count > 0 || a.error;
+                continue;
+            }
             if (a.failed) {
                 failures++;
                 continue;
@@ -375,18 +415,27 @@ void report(FILE *jf, const char *family, const std::vector<Case> &cs, const std
     }
 }
 
+// --backend: "minko" names the warm run only; other names match as prefixes.
+bool wanted(const char *filter, const char *name)
+{
+    if (!filter) return true;
+    if (!strcmp(filter, "minko")) return !strcmp(name, "minko");
+    return !strncmp(name, filter, strlen(filter));
+}
+
 } // namespace
 
 int main(int argc, char **argv)
 {
     bool quick = false;
-    const char *json = nullptr, *only = nullptr;
+    const char *json = nullptr, *only = nullptr, *backend = nullptr;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--quick")) quick = true;
         else if (!strcmp(argv[i], "--json") && i + 1 < argc) json = argv[++i];
         else if (!strcmp(argv[i], "--family") && i + 1 < argc) only = argv[++i];
+        else if (!strcmp(argv[i], "--backend") && i + 1 < argc) backend = argv[++i];
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--family stacked|random]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--family stacked|random|apart] [--backend NAME]\n", argv[0]);
             return 2;
         }
     }
@@ -405,34 +454,36 @@ int main(int argc, char **argv)
     const char *bullet_detector = sizeof(btScalar) == 8 ? "bullet_f64.btBoxBoxDetector" : "bullet_f32.btBoxBoxDetector";
     const char *bullet_algorithm =
         sizeof(btScalar) == 8 ? "bullet_f64.btBoxBoxCollisionAlgorithm" : "bullet_f32.btBoxBoxCollisionAlgorithm";
-    const char *families[] = {"stacked", "random"};
+    const char *families[] = {"stacked", "random", "apart"};
     for (const char *fam : families) {
         if (only && strcmp(only, fam)) continue;
-        std::vector<Case> cs = make_cases(fam, n, fam[0] == 's' ? 1 : 2);
+        std::vector<Case> cs = make_cases(fam, n, fam[0] == 's' ? 1 : fam[0] == 'r' ? 2 : 3);
         std::vector<Backend> bes;
         {
-            MinkoRun run(cs);
+            MinkoRun run(cs, true), cold(cs, false);
             mk_manifold probe;
             mk_status st = mk_collide(&run.a[0], cs[0].xa, &run.b[0], cs[0].xb, 0, nullptr, &probe);
             if (st != MK_OK) {
                 printf("%-8s minko: box-box is not in this build (%s); competitors only, ratios to the first of them\n", fam,
                        mk_status_name(st));
             } else {
-                bes.push_back(measure("minko", run, cs, loops));
+                if (wanted(backend, "minko")) bes.push_back(measure("minko", run, cs, loops));
+                if (wanted(backend, "minko.cold")) bes.push_back(measure("minko.cold", cold, cs, loops));
             }
         }
-        {
+        if (wanted(backend, bullet_detector)) {
             BulletDetectorRun run(cs);
             bes.push_back(measure(bullet_detector, run, cs, loops));
         }
-        {
+        if (wanted(backend, bullet_algorithm)) {
             BulletAlgorithmRun run(cs);
             bes.push_back(measure(bullet_algorithm, run, cs, loops));
         }
-        {
+        if (wanted(backend, "ode.dCollide")) {
             OdeRun run(cs);
             bes.push_back(measure("ode.dCollide", run, cs, loops));
         }
+        if (bes.empty()) continue;
         report(jf, fam, cs, bes);
     }
     dCloseODE();

@@ -34,14 +34,36 @@ MK_ALWAYS_INLINE mk_hit mk_hit_grow(mk_vec3 a, mk_vec3 b, mk_real dc, mk_vec3 n,
     return h;
 }
 
+/* 1/sqrt(l2), and sqrt(l2) in *len, with the square root and the division
+ * side by side rather than one after the other: a closed form's time is
+ * mostly the latency of its chain of dependent operations. Where 1/l2 would
+ * overflow or vanish the division waits for the root; l2 == 0 gives 0. */
+MK_ALWAYS_INLINE mk_real mk_inv_len(mk_real l2, mk_real *len)
+{
+    mk_real l = mk_sqrt_(l2);
+    *len = l;
+    if (l2 >= 1 / MK_REAL_MAX && l2 <= MK_REAL_MAX) return l * (1 / l2);
+    return l > 0 ? 1 / l : 0;
+}
+
+/* v / |v|, and |v| in *len (mk_inv_len); a zero v gives the zero vector
+ * (callers pick their own direction). */
+MK_ALWAYS_INLINE mk_vec3 mk_unit_len(mk_vec3 v, mk_real *len) { return mk_v3_scale(v, mk_inv_len(mk_v3_len2(v), len)); }
+
+/* The point of a box core of half extents h nearest x (box frame). */
+MK_ALWAYS_INLINE mk_vec3 mk_box_clamp(mk_vec3 h, mk_vec3 x)
+{
+    return mk_v3(mk_clamp(x.x, -h.x, h.x), mk_clamp(x.y, -h.y, h.y), mk_clamp(x.z, -h.z, h.z));
+}
+
 /* A box core of half extents h, rounded by ra, against a sphere of radius
  * rb centred at c, in the box's frame. */
 MK_ALWAYS_INLINE mk_hit mk_closest_box_sphere(mk_vec3 h, mk_real ra, mk_vec3 c, mk_real rb)
 {
-    mk_vec3 q = mk_v3(mk_clamp(c.x, -h.x, h.x), mk_clamp(c.y, -h.y, h.y), mk_clamp(c.z, -h.z, h.z));
-    mk_vec3 dv = mk_v3_sub(c, q), n;
-    mk_real l = mk_v3_len(dv), gx, gy, gz, g;
-    if (l > 0) return mk_hit_grow(q, c, l, mk_v3_scale(dv, 1 / l), ra, rb);
+    mk_vec3 q = mk_box_clamp(h, c), n;
+    mk_real l, gx, gy, gz, g;
+    n = mk_unit_len(mk_v3_sub(c, q), &l);
+    if (l > 0) return mk_hit_grow(q, c, l, n, ra, rb);
     /* Centre inside the core: leave through the nearest face. */
     gx = h.x - mk_fabs_(c.x);
     gy = h.y - mk_fabs_(c.y);
@@ -66,67 +88,82 @@ MK_ALWAYS_INLINE mk_hit mk_closest_box_sphere(mk_vec3 h, mk_real ra, mk_vec3 c, 
  * origin, radius ra) against a sphere of radius rb centred at c. */
 MK_ALWAYS_INLINE mk_hit mk_closest_capsule_sphere(mk_real hh, mk_vec3 u, mk_real ra, mk_vec3 c, mk_real rb)
 {
-    mk_vec3 q = mk_v3_scale(u, mk_clamp(mk_v3_dot(c, u), -hh, hh)), dv = mk_v3_sub(c, q);
-    mk_real l = mk_v3_len(dv);
+    mk_vec3 q = mk_v3_scale(u, mk_clamp(mk_v3_dot(c, u), -hh, hh)), n;
+    mk_real l;
+    n = mk_unit_len(mk_v3_sub(c, q), &l);
     /* Centre on the segment: any direction across the axis is a shortest way out. */
-    mk_vec3 n = l > 0 ? mk_v3_scale(dv, 1 / l) : mk_v3_perp(u);
-    return mk_hit_grow(q, c, l, n, ra, rb);
+    return mk_hit_grow(q, c, l, l > 0 ? n : mk_v3_perp(u), ra, rb);
 }
 
-/* Closest points of segments [p0, p1] and [q0, q1]: parameters s, t in [0, 1].
- * Parallel segments get the midpoint of the overlap of their projections, so
- * the answer is symmetric and stable under small motions. */
-MK_ALWAYS_INLINE void mk_segment_segment(mk_vec3 p0, mk_vec3 p1, mk_vec3 q0, mk_vec3 q1, mk_real *s_out, mk_real *t_out)
+/* Closest parameters s, t of the segments {s U : |s| <= ha} and
+ * {c + t V : |t| <= hb}, from a = U.U, e = V.V, b = U.V, cu = c.U, cv = c.V
+ * and w2 = |U x V|^2, which is a e - b^2 without that difference's
+ * cancellation for nearly parallel segments. Parallel segments (sin^2 of
+ * the angle at rounding level) get the midpoint of the overlap of B's
+ * projection with A, so the answer is symmetric and stable under small
+ * motions. For unit axes pass the constants a = e = 1: inlined, the
+ * divisions by them vanish. */
+MK_ALWAYS_INLINE void mk_segment_params(mk_real a, mk_real e, mk_real b, mk_real cu, mk_real cv, mk_real w2, mk_real ha, mk_real hb,
+                                        mk_real *s_out, mk_real *t_out)
 {
-    mk_vec3 d1 = mk_v3_sub(p1, p0), d2 = mk_v3_sub(q1, q0), r = mk_v3_sub(p0, q0);
-    mk_real a = mk_v3_len2(d1), e = mk_v3_len2(d2), b = mk_v3_dot(d1, d2), c = mk_v3_dot(d1, r), f = mk_v3_dot(d2, r);
-    mk_real denom = a * e - b * b, s, t;
-    /* Parallel when sin^2 of the angle is at rounding level: the 2x2 system is singular. */
-    if (denom > MK_REAL(16.0) * MK_REAL_EPSILON * a * e) {
-        s = mk_clamp((b * f - c * e) / denom, 0, 1);
+    mk_real s, t;
+    if (w2 > MK_REAL(16.0) * MK_REAL_EPSILON * a * e) {
+        s = mk_clamp((cu * e - b * cv) / w2, -ha, ha);
     } else {
-        /* Projections of q0, q1 on p's parameter line; centre of the overlap. */
-        mk_real s0 = -c / a, s1 = (b - c) / a;
-        mk_real lo = mk_max(mk_min(s0, s1), 0), hi = mk_min(mk_max(s0, s1), 1);
-        s = lo <= hi ? MK_REAL(0.5) * (lo + hi) : (mk_max(s0, s1) < 0 ? 0 : 1);
+        /* B's ends projected on A's line; the centre of their overlap with A. */
+        mk_real p0 = (cu - b * hb) / a, p1 = (cu + b * hb) / a;
+        mk_real lo = mk_max(mk_min(p0, p1), -ha), hi = mk_min(mk_max(p0, p1), ha);
+        s = lo <= hi ? MK_REAL(0.5) * (lo + hi) : (mk_max(p0, p1) < -ha ? -ha : ha);
     }
-    t = mk_clamp((b * s + f) / e, 0, 1);
-    s = mk_clamp((b * t - c) / a, 0, 1);
+    t = mk_clamp((b * s - cv) / e, -hb, hb);
+    s = mk_clamp((b * t + cu) / a, -ha, ha);
     *s_out = s;
     *t_out = t;
+}
+
+/* Closest points of segments [p0, p1] and [q0, q1]: parameters s, t in [0, 1]
+ * (mk_segment_params on the centres and half-axes). */
+MK_ALWAYS_INLINE void mk_segment_segment(mk_vec3 p0, mk_vec3 p1, mk_vec3 q0, mk_vec3 q1, mk_real *s_out, mk_real *t_out)
+{
+    mk_vec3 u = mk_v3_scale(mk_v3_sub(p1, p0), MK_REAL(0.5)), v = mk_v3_scale(mk_v3_sub(q1, q0), MK_REAL(0.5));
+    mk_vec3 c = mk_v3_scale(mk_v3_sub(mk_v3_add(q0, q1), mk_v3_add(p0, p1)), MK_REAL(0.5));
+    mk_real s, t;
+    mk_segment_params(mk_v3_len2(u), mk_v3_len2(v), mk_v3_dot(u, v), mk_v3_dot(c, u), mk_v3_dot(c, v), mk_v3_len2(mk_v3_cross(u, v)), 1,
+                      1, &s, &t);
+    *s_out = MK_REAL(0.5) * (s + 1);
+    *t_out = MK_REAL(0.5) * (t + 1);
 }
 
 /* Capsule A (unit axis u through the origin, half height ha, radius ra)
  * against capsule B (unit axis v through c, half height hb, radius rb). */
 MK_ALWAYS_INLINE mk_hit mk_closest_capsule_capsule(mk_real ha, mk_vec3 u, mk_real ra, mk_vec3 c, mk_vec3 v, mk_real hb, mk_real rb)
 {
-    mk_real s, t, l;
-    mk_vec3 p0 = mk_v3_scale(u, -ha), p1 = mk_v3_scale(u, ha);
-    mk_vec3 q0 = mk_v3_mad(c, -hb, v), q1 = mk_v3_mad(c, hb, v);
-    mk_vec3 pa, pb, dv, n, axes;
-    mk_segment_segment(p0, p1, q0, q1, &s, &t);
-    pa = mk_v3_lerp(p0, p1, s);
-    pb = mk_v3_lerp(q0, q1, t);
-    dv = mk_v3_sub(pb, pa);
-    l = mk_v3_len(dv);
+    mk_vec3 axes = mk_v3_cross(u, v), pa, pb, n;
+    mk_real w2 = mk_v3_len2(axes), s, t, l;
+    mk_segment_params(1, 1, mk_v3_dot(u, v), mk_v3_dot(c, u), mk_v3_dot(c, v), w2, ha, hb, &s, &t);
+    pa = mk_v3_scale(u, s);
+    pb = mk_v3_mad(c, t, v);
     /* Both points inside their segments: an edge-edge pair, whose normal is
-     * the cross product of the axes exactly, and whose distance is that of the
-     * two lines (no error from s and t). Also the only sane normal when the
-     * cores cross (l == 0). Its direction error is about eps / sin(angle), so
-     * below sin^2 = sqrt(eps) the difference of the points is the better normal. */
-    axes = mk_v3_cross(u, v);
-    if (s > 0 && s < 1 && t > 0 && t < 1 && mk_v3_len2(axes) > mk_sqrt_(MK_REAL_EPSILON)) {
-        n = mk_v3_normalize(axes);
-        if (mk_v3_dot(n, l > 0 ? dv : c) < 0) n = mk_v3_neg(n);
-        l = mk_v3_dot(n, mk_v3_sub(q0, p0));
-        if (l < 0) l = 0;
+     * the cross product of the axes exactly, and whose distance is that of
+     * the two lines, n.c (no error from s and t). Also the only sane normal
+     * when the cores cross (pa == pb). Its direction error is about
+     * eps / sin(angle), so below sin^2 = sqrt(eps) the difference of the
+     * points is the better normal. */
+    if (mk_fabs_(s) < ha && mk_fabs_(t) < hb && w2 > mk_sqrt_(MK_REAL_EPSILON)) {
+        n = mk_unit_len(axes, &l);
+        l = mk_v3_dot(n, c);
+        if (l < 0) {
+            n = mk_v3_neg(n);
+            l = -l;
+        }
         pb = mk_v3_mad(pa, l, n);
-    } else if (l > 0) {
-        n = mk_v3_scale(dv, 1 / l);
     } else {
-        /* Parallel cores that overlap: leave across the axis, towards B's centre if it is off the axis. */
-        mk_vec3 off = mk_v3_mad(c, -mk_v3_dot(c, u), u);
-        n = mk_v3_len2(off) > 0 ? mk_v3_normalize(off) : mk_v3_perp(u);
+        n = mk_unit_len(mk_v3_sub(pb, pa), &l);
+        if (!(l > 0)) {
+            /* Parallel cores that overlap: leave across the axis, towards B's centre if it is off the axis. */
+            mk_vec3 off = mk_v3_mad(c, -mk_v3_dot(c, u), u);
+            n = mk_v3_len2(off) > 0 ? mk_v3_normalize(off) : mk_v3_perp(u);
+        }
     }
     return mk_hit_grow(pa, pb, l, n, ra, rb);
 }

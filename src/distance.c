@@ -184,11 +184,6 @@ static int in_box(mk_vec3 h, mk_vec3 x, mk_real tol)
     return mk_fabs_(x.x) <= h.x + tol && mk_fabs_(x.y) <= h.y + tol && mk_fabs_(x.z) <= h.z + tol;
 }
 
-static mk_vec3 clamp_box(mk_vec3 h, mk_vec3 x)
-{
-    return mk_v3(mk_clamp(x.x, -h.x, h.x), mk_clamp(x.y, -h.y, h.y), mk_clamp(x.z, -h.z, h.z));
-}
-
 /* Witnesses of a SAT axis n with separation d for one box (half extents hf,
  * its own frame) and the other box's supporting corner q (same frame): q
  * moved back by d along n lands on this box's supporting plane; clamped into
@@ -200,7 +195,7 @@ static mk_vec3 clamp_box(mk_vec3 h, mk_vec3 x)
 static int face_witness(mk_vec3 hf, mk_vec3 ho, const mk_mat3 *r_o, mk_vec3 t_o, mk_vec3 q, mk_real d, mk_vec3 n, mk_real tol,
                         mk_vec3 *on_face, mk_vec3 *on_other)
 {
-    mk_vec3 x0 = mk_v3_mad(q, -d, n), x = clamp_box(hf, x0), y = mk_v3_mad(x, d, n);
+    mk_vec3 x0 = mk_v3_mad(q, -d, n), x = mk_box_clamp(hf, x0), y = mk_v3_mad(x, d, n);
     *on_face = x;
     *on_other = q;
     if (!(mk_fabs_(mk_v3_dot(n, mk_v3_sub(x, x0))) <= tol)) return 0; /* clamping left the plane */
@@ -255,10 +250,10 @@ static mk_real corner_pair(const mk_pair *p, int side, int c, mk_vec3 *pa, mk_ve
 {
     if (side == 0) {
         *pb = mk_v3_add(mk_mat3_mul_v3(p->r, box_corner(p->b->u.half_extents, c)), p->t);
-        *pa = clamp_box(p->a->u.half_extents, *pb);
+        *pa = mk_box_clamp(p->a->u.half_extents, *pb);
     } else {
         *pa = box_corner(p->a->u.half_extents, c);
-        *pb = mk_v3_add(mk_mat3_mul_v3(p->r, clamp_box(p->b->u.half_extents, mk_mat3_tmul_v3(p->r, mk_v3_sub(*pa, p->t)))),
+        *pb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_box_clamp(p->b->u.half_extents, mk_mat3_tmul_v3(p->r, mk_v3_sub(*pa, p->t)))),
                         p->t);
     }
     return mk_v3_len2(mk_v3_sub(*pb, *pa));
@@ -419,10 +414,10 @@ MK_ALWAYS_INLINE void put_aligned(mk_hit h, mk_vec3 pa, int flip, mk_distance_re
 MK_ALWAYS_INLINE void spheres(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
                               mk_distance_result *r)
 {
-    mk_vec3 d = mk_v3_sub(xb->p, xa->p);
-    mk_real l = mk_v3_len(d);
+    mk_real l;
+    mk_vec3 n = mk_unit_len(mk_v3_sub(xb->p, xa->p), &l);
     /* Concentric spheres: every direction is a shortest way out; take +z. */
-    mk_vec3 n = l > 0 ? mk_v3_scale(d, 1 / l) : mk_v3(0, 0, 1);
+    if (!(l > 0)) n = mk_v3(0, 0, 1);
     put(l - a->radius - b->radius, n, mk_v3_mad(xa->p, a->radius, n), 0, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 

@@ -323,6 +323,28 @@ static mk_status apart(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 }
 #endif
 
+/* cache->axis above this: the pair was apart beyond the margin last frame
+ * along the SAT axis of kind axis - APART_HINT, whose indices a and b + 1
+ * are kept in cache->reference and cache->face (which a polytope pair
+ * does not otherwise carry across frames). A pair that stays apart then
+ * costs one axis (mk_sat_options.first). */
+#define APART_HINT 4
+
+/* Whether two polytopes (boxes, hulls) are farther apart than the margin by
+ * their bounding balls about their origins: then nothing else is needed,
+ * not even their rotations. Broadphase pairs of boxes that only overlap in
+ * their bounding boxes mostly end here. */
+static mk_real polytope_reach(const mk_shape *s)
+{
+    return s->radius + (s->type == MK_SHAPE_BOX ? mk_v3_len(s->u.half_extents) : mk_v3_len(s->u.hull->centroid) + s->u.hull->outer_radius);
+}
+
+static int polytopes_apart(const mk_shape *a, mk_vec3 pa, const mk_shape *b, mk_vec3 pb, mk_real margin)
+{
+    mk_real reach = polytope_reach(a) + polytope_reach(b) + margin;
+    return mk_v3_len2(mk_v3_sub(pb, pa)) > reach * reach;
+}
+
 /* Two polytopes (boxes, hulls): SAT (src/sat.h; the 15-axis closed form for
  * two boxes), then a face axis clips the incident face against the
  * reference face and an edge axis gives the closest points of the two
@@ -335,14 +357,24 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     mk_sat_options opt;
     mk_sat_result sat;
     mk_feat ref, inc;
+    opt = mk_sat_defaults();
     opt.stop_above = m->margin + ra + rb;
+    if (cache && cache->axis > APART_HINT) {
+        /* Apart last frame: that axis first, and nothing else is carried. */
+        opt.first = (mk_sat_kind)(cache->axis - APART_HINT);
+        opt.first_a = cache->reference;
+        opt.first_b = (int)cache->face - 1;
+        cache->axis = cache->reference = 0;
+        cache->face = 0;
+    }
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
     opt.prefer_rel = MK_SAT_PREFER_REL;
     mk_box_hull va, vb;
     const mk_hull *ha = a->u.hull, *hb = b->u.hull;
     int boxes = a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX;
-    opt.prefer_abs = MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
-                                                b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
+    opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0
+                                               : MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
+                                                                            b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
     if (boxes) {
         mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p->r, p->t, &opt, &sat);
         if (sat.kind == MK_SAT_EDGES) box_face_axis(p, &sat);
@@ -360,11 +392,20 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
         mk_sat(ha, hb, &p->r, p->t, &opt, &sat);
         if (sat.kind == MK_SAT_EDGES) face_axis(ha, hb, p, &sat);
     }
-    if (cache) cache->axis = sat.best - ra - rb > m->margin ? MK_SAT_NONE : (int)sat.kind;
-    if (sat.best - ra - rb > m->margin) return MK_OK;
+    if (sat.best - ra - rb > m->margin) {
+        if (cache) {
+            cache->axis = APART_HINT + (int)sat.kind;
+            cache->reference = sat.a;
+            cache->face = (mk_feature)(sat.b + 1);
+        }
+        return MK_OK;
+    }
+    if (cache) cache->axis = (int)sat.kind;
     m->normal = sat.normal;
     m->cores_apart = sat.separation > 0;
-    if (sat.kind == MK_SAT_FACE_A) {
+    if (boxes && sat.kind != MK_SAT_EDGES) {
+        mk_mf_clip_boxes(m, p, sat.kind == MK_SAT_FACE_A, sat.kind == MK_SAT_FACE_A ? sat.a : sat.b, ra, rb);
+    } else if (sat.kind == MK_SAT_FACE_A) {
         polytope_face(a, sat.a, &ref);
         mk_support_feature(b, mk_mat3_tmul_v3(p->r, mk_v3_neg(sat.normal)), &inc);
         mk_feat_transform(&inc, p);
@@ -451,7 +492,7 @@ static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair 
         const mk_mf_point *p = &m->p[i];
         mk_contact_point *c = &out->points[i];
         mk_vec3 pb = mk_v3_mad(p->pa, -p->depth, m->normal);
-        mk_vec3 wa = mk_v3_add(mk_mat3_mul_v3(R, p->pa), pa), wb = mk_v3_add(mk_mat3_mul_v3(R, pb), pa);
+        mk_vec3 wa = mk_v3_add(mk_mat3_mul_v3(R, p->pa), pa), wb = mk_v3_mad(wa, -p->depth, n); /* the contract's relation */
         mk_vec3 lb = mk_mat3_tmul_v3(pair->r, mk_v3_sub(pb, pair->t));
         c->depth = p->depth;
         c->flags = p->depth < 0 ? MK_CONTACT_SPECULATIVE : 0;
@@ -492,6 +533,14 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
         swap = 1;
     }
     if (swap) mk_swap_pair_(&a, &xa, &b, &xb);
+#ifndef MK_WITHOUT_SAT
+    if (fn == polytopes && polytopes_apart(a, xa.p, b, xb.p, margin)) {
+        if (cache) cache->axis = MK_SAT_NONE;
+        out->count = 0;
+        out->normal = mk_v3(0, 0, 1);
+        return MK_OK;
+    }
+#endif
     /* A's rotation once, exact for any accepted quaternion (gjk.h): it builds
      * the pair and takes the manifold back to world space. */
     ra = mk_rotation_of(xa.q);

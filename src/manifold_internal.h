@@ -70,6 +70,12 @@ void mk_feat_transform(mk_feat *f, const mk_pair *p);
  * MK_MF_SIN_TOL. ra, rb are the rounding radii. */
 void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, mk_real ra, mk_real rb);
 
+/* mk_mf_clip of two box cores of pair p (both shapes boxes) with box face
+ * `face` of A (ref_is_a) or of B as the reference, against the incident
+ * face of the other box along m->normal (set, a SAT face axis): the same
+ * candidates and IDs, computed in the reference box's frame. */
+void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb);
+
 /* The manifold of two cores whose closest points are known: n (unit, A to B)
  * and the core witness points ca on A and cb on B (A's frame), with core
  * distance dist along n (< 0 when the cores overlap). Builds a face clip, a

@@ -687,6 +687,40 @@ START_TEST(box_box_random_exact_depth)
 }
 END_TEST
 
+/* Boxes apart: mk_collide returns before any SAT when their bounding balls
+ * are farther apart than the margin. Corner to corner along the diagonal
+ * the balls' gap is the boxes' distance, so the margin's edge is exact: a
+ * speculative point just inside it, none just outside, and the cache's axis
+ * dropped. */
+START_TEST(box_box_apart_margin_edge)
+{
+    mk_shape a;
+    mk_manifold m;
+    mk_manifold_cache cache;
+    mk_vec3 dir = mk_v3_normalize(mk_v3(1, 1, 1));
+    mk_real margin = (mk_real)0.1, root3 = (mk_real)1.7320508075688772;
+    int k;
+    mk_shape_box(mk_v3(0.5, 0.5, 0.5), 0, &a);
+    for (k = 0; k < 2; ++k) {
+        mk_real gap = margin * (k ? (mk_real)1.001 : (mk_real)0.999);
+        memset(&cache, 0, sizeof cache);
+        cache.axis = 1;
+        MK_ASSERT_STATUS(mk_collide(&a, at(0, 0, 0), &a, mk_transform_make(mk_v3_scale(dir, root3 + gap), mk_quat_identity()), margin,
+                                   &cache, &m),
+                         MK_OK);
+        if (k) {
+            ck_assert_int_eq(m.count, 0);
+            ck_assert_int_eq(cache.axis, 0);
+        } else {
+            ck_assert_int_eq(m.count, 1);
+            MK_ASSERT_NEAR(m.points[0].depth, -gap, 64 * TOL);
+            ck_assert_uint_eq(m.points[0].features, PAIR(V(7), V(0)));
+            ck_assert_uint_eq(m.points[0].flags, MK_CONTACT_SPECULATIVE);
+        }
+    }
+}
+END_TEST
+
 /* Cylinder standing on a box, sphere on a cylinder's cap, capsule lying on a
  * cylinder's side: GJK gives the normal, the support features the points. */
 START_TEST(smooth_pairs_through_gjk)
@@ -976,6 +1010,57 @@ START_TEST(rounded_polytopes_exact)
 }
 END_TEST
 
+/* Pairs that stay apart keep last frame's separating axis in the cache and
+ * test it first (one axis instead of a whole SAT); when they meet, the
+ * first contact frame is a cold one, so exactly the cold answer. Boxes and
+ * hulls approaching along random directions with random spins. */
+START_TEST(apart_then_contact_is_cold)
+{
+    mk_rng r = {47};
+    mk_vec3 pts[20];
+    mk_hull *h;
+    mk_shape shapes[3];
+    int i, k, f, met = 0;
+    for (k = 0; k < 20; ++k) pts[k] = mk_v3_mul(mk_rng_dir(&r), mk_v3(0.6, 0.4, 0.5));
+    h = make_hull(pts, 20);
+    mk_shape_box(mk_v3(0.5, 0.3, 0.4), 0, &shapes[0]);
+    mk_shape_hull(h, 0, &shapes[1]);
+    mk_shape_box(mk_v3(0.2, 0.6, 0.3), (mk_real)0.02, &shapes[2]);
+    for (i = 0; i < 120; ++i) {
+        const mk_shape *a = &shapes[i % 3], *b = &shapes[(i / 3) % 3];
+        mk_vec3 dir = mk_rng_dir(&r), spin = mk_rng_dir(&r);
+        mk_quat qa = mk_rng_quat(&r), qb = mk_rng_quat(&r);
+        mk_manifold_cache cache;
+        int was_apart = 0;
+        memset(&cache, 0, sizeof cache);
+        for (f = 0; f < 40; ++f) {
+            mk_real dist = (mk_real)(1.6 - 0.04 * f);
+            mk_transform xb = mk_transform_make(mk_v3_scale(dir, dist), mk_quat_mul(mk_quat_from_axis_angle(spin, (mk_real)(0.01 * f)), qb));
+            mk_transform xa = mk_transform_make(mk_v3_zero(), qa);
+            mk_manifold warm, cold;
+            int j;
+            MK_ASSERT_STATUS(mk_collide(a, xa, b, xb, 0, &cache, &warm), MK_OK);
+            cold = collide(a, xa, b, xb, 0);
+            if (warm.count == 0) {
+                ck_assert_int_eq(cold.count, 0);
+                was_apart = 1;
+                continue;
+            }
+            ck_assert_msg(was_apart, "pair %d met at once", i);
+            ck_assert_int_eq(warm.count, cold.count);
+            for (j = 0; j < cold.count; ++j) {
+                ck_assert_uint_eq(warm.points[j].features, cold.points[j].features);
+                ck_assert(warm.points[j].depth == cold.points[j].depth);
+            }
+            ++met;
+            break;
+        }
+    }
+    ck_assert_int_gt(met, 100);
+    mk_hull_destroy(h);
+}
+END_TEST
+
 /* A rounded cylinder on a rounded hull cube (the GJK/EPA pairs), cores apart
  * and cores overlapping: standing, its rim points all at the exact depth;
  * tilted by 0.3 rad, its lowest rim point at the analytic depth. */
@@ -1115,11 +1200,13 @@ static Suite *manifold_suite(void)
     tcase_add_test(tc, box_box_face_overlap_rectangle);
     tcase_add_test(tc, box_box_edge_contacts);
     tcase_add_test(tc, box_box_random_exact_depth);
+    tcase_add_test(tc, box_box_apart_margin_edge);
     tcase_add_test(tc, smooth_pairs_through_gjk);
     tcase_add_test(tc, hull_cube_contacts);
     tcase_add_test(tc, hull_large_face_on_plane);
     tcase_add_test(tc, hull_random_exact_depth);
     tcase_add_test(tc, rounded_polytopes_exact);
+    tcase_add_test(tc, apart_then_contact_is_cold);
     tcase_add_test(tc, cylinder_on_rounded_hull);
     suite_add_tcase(s, tc);
     tc = tcase_create("feature_ids");
