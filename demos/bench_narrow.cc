@@ -891,7 +891,7 @@ Outcome run_isolated(Backend &b, const std::vector<const mk_case *> &cs, int rep
 struct Options {
     bool quick = false, append = false, selftest = false, list = false, table = false, inproc = false;
     const char *json = nullptr;
-    std::vector<std::string> families, backends;
+    std::vector<std::string> families, backends, variants;
     int reps = 0, n = 0;
 };
 
@@ -977,9 +977,10 @@ int selftest(std::vector<std::unique_ptr<Backend>> &backends)
 void usage(const char *argv0)
 {
     std::fprintf(stderr,
-                 "usage: %s [--quick] [--table] [--json FILE [--append]] [--family NAME]... [--backend NAME]...\n"
+                 "usage: %s [--quick] [--table] [--json FILE [--append]] [--family NAME]... [--variant NAME]... [--backend NAME]...\n"
                  "          [--n N] [--reps N] [--list] [--selftest] [--inproc]\n"
                  "  --quick: 10 + 10 cases per family, 3 loops, summary only (--table adds every row)\n"
+                 "  --variant: separated, penetrating, or a regression's name (all by default)\n"
                  "  --inproc: no child processes (for valgrind --tool=callgrind; a hanging backend hangs the run)\n",
                  argv0);
 }
@@ -1004,6 +1005,7 @@ int main(int argc, char **argv)
         else if (a == "--json" && i + 1 < argc) o.json = argv[++i];
         else if (a == "--family" && i + 1 < argc) o.families.push_back(argv[++i]);
         else if (a == "--backend" && i + 1 < argc) o.backends.push_back(argv[++i]);
+        else if (a == "--variant" && i + 1 < argc) o.variants.push_back(argv[++i]);
         else if (a == "--n" && i + 1 < argc) o.n = std::atoi(argv[++i]);
         else if (a == "--reps" && i + 1 < argc) o.reps = std::atoi(argv[++i]);
         else {
@@ -1054,6 +1056,10 @@ int main(int argc, char **argv)
             ++hi;
         std::vector<const mk_case *> cs;
         for (int i = lo; i < hi; ++i) cs.push_back(&set.cases[i]);
+        if (!o.variants.empty() && std::find(o.variants.begin(), o.variants.end(), set.cases[lo].variant) == o.variants.end()) {
+            lo = hi;
+            continue;
+        }
         std::vector<Row> rows;
         for (auto &b : backends) {
             Outcome out = o.inproc ? run_inproc(*b, cs, reps) : run_isolated(*b, cs, reps);

@@ -38,14 +38,6 @@
 
 #define QH_TOL_ULPS 16 /* see the header comment */
 #define QH_FLAT 2 /* merged faces stay within QH_FLAT * tol of their plane */
-/* Vertex count up to which mk_hull_support_index scans instead of climbing.
- * Measured on ellipsoid hulls (valgrind --tool=callgrind, instructions per
- * query; scan = 16 V + 38): cold-started climbing costs 373 at V = 16, 444 at
- * 32, 671 at 128; warm-started from the previous answer along a slowly
- * turning direction (GJK's pattern), 275 at 16, 288 at 32, 293 at 128. The
- * scan's branches predict better, so in wall time it ties warm climbing near
- * V = 24 and beats cold climbing beyond 48; 24 splits the difference. */
-#define MK_HULL_SCAN_MAX 24
 
 enum { QH_LIVE = 0, QH_NONCONVEX = 1, QH_DELETED = 2 };
 
@@ -967,17 +959,6 @@ static void breadth_first_faces(qh *q, int *order, int nf)
     }
 }
 
-static int scan_support(const mk_hull *h, mk_vec3 dir)
-{
-    int v, best = 0;
-    mk_real best_d = mk_v3_dot(dir, h->vertices[0]);
-    for (v = 1; v < h->vertex_count; ++v) {
-        mk_real d = mk_v3_dot(dir, h->vertices[v]);
-        if (d > best_d) best = v, best_d = d;
-    }
-    return best;
-}
-
 /* The neighbour lists the support walk reads: each vertex's fan, in ring
  * order, as one contiguous run of vertex indices (CSR), so its neighbours'
  * loads are independent instead of a chain of half-edge hops. */
@@ -999,7 +980,7 @@ static void fill_adjacency(const mk_hull *h, uint16_t *adj)
     for (axis = 0; axis < 6; ++axis) {
         mk_real s = axis & 1 ? -1 : 1;
         mk_vec3 d = mk_v3(axis / 2 == 0 ? s : 0, axis / 2 == 1 ? s : 0, axis / 2 == 2 ? s : 0);
-        adj[k + axis] = (uint16_t)scan_support(h, d);
+        adj[k + axis] = (uint16_t)mk_hull_scan_support_(h, d);
     }
 }
 
@@ -1206,81 +1187,8 @@ void mk_hull_destroy(mk_hull *hull)
 
 /* ---- support ------------------------------------------------------------------- */
 
-/* Steepest ascent from `best` until no neighbour is higher. The neighbours
- * of a vertex are one contiguous run (h->adjacency), so their dot products
- * are independent loads the CPU overlaps, and taking the highest of them
- * shortens the path; moving only on a strict increase cannot loop. */
-static int climb(const mk_hull *h, mk_vec3 dir, int best, mk_real *best_d)
-{
-    const uint16_t *adj = h->adjacency;
-    for (;;) {
-        int k, end = adj[best + 1], next = best;
-        mk_real nd = *best_d;
-        for (k = adj[best]; k < end; ++k) {
-            mk_real d = mk_v3_dot(dir, h->vertices[adj[k]]);
-            if (d > nd) next = adj[k], nd = d;
-        }
-        if (next == best) return best;
-        best = next;
-        *best_d = nd;
-    }
-}
-
-/* A vertex higher than best on one of the faces around it, or -1. The two
- * vertices next to best on each face are its neighbours, already beaten, so
- * only faces of four or more vertices have anything to look at. */
-static int higher_on_faces(const mk_hull *h, mk_vec3 dir, int best, mk_real best_d)
-{
-    int e0 = h->vertex_edge[best], e = e0;
-    do {
-        int x = h->edges[h->edges[e].next].next;
-        for (; h->edges[x].next != e; x = h->edges[x].next)
-            if (mk_v3_dot(dir, h->vertices[h->edges[x].origin]) > best_d) return h->edges[x].origin;
-        e = h->edges[h->edges[e].twin].next;
-    } while (e != e0);
-    return -1;
-}
-
-/* The best of the six axis-extreme vertices stored after the neighbour lists. */
-static int cold_start(const mk_hull *h, mk_vec3 dir, mk_real *best_d)
-{
-    const uint16_t *x = h->adjacency + h->adjacency[h->vertex_count];
-    int k, best = x[0];
-    *best_d = mk_v3_dot(dir, h->vertices[best]);
-    for (k = 1; k < 6; ++k) {
-        mk_real d = mk_v3_dot(dir, h->vertices[x[k]]);
-        if (d > *best_d) best = x[k], *best_d = d;
-    }
-    return best;
-}
-
-/* A vertex of a convex polytope that no neighbour beats along dir is a global
- * maximum (the simplex-method argument), so walking uphill over the vertex
- * graph finds the support in O(path length) instead of O(V). Ties do not
- * loop: we only move on a strict increase. But faces are convex only within
- * the construction tolerance, and a vertex that is a hair reflex in a long
- * face can stop the walk while the face's far end is much higher; so a walk
- * that stops also looks at every vertex of the faces around it, and goes on
- * from there if one is higher (only on hulls with faces of four or more
- * vertices: a triangle holds nothing but neighbours). Below MK_HULL_SCAN_MAX
- * vertices a plain scan of the contiguous vertex array is cheaper. */
+/* The walk itself is hull_support.h's, inlined into the GJK and EPA loops. */
 int mk_hull_support_index(const mk_hull *h, mk_vec3 dir, int start)
 {
-    int best, up, all_triangles = h->face_count == 2 * h->vertex_count - 4; /* Euler: F = 2V - 4 */
-    mk_real best_d;
-    if (h->vertex_count <= MK_HULL_SCAN_MAX) return scan_support(h, dir);
-    if (start >= 0 && start < h->vertex_count) {
-        best = start;
-        best_d = mk_v3_dot(dir, h->vertices[best]);
-    } else {
-        best = cold_start(h, dir, &best_d);
-    }
-    for (;;) {
-        best = climb(h, dir, best, &best_d);
-        if (all_triangles) return best; /* a vertex's faces hold only its neighbours */
-        up = higher_on_faces(h, dir, best, best_d);
-        if (up < 0) return best;
-        best = up;
-        best_d = mk_v3_dot(dir, h->vertices[up]);
-    }
+    return mk_hull_support_(h, dir, start);
 }

@@ -66,6 +66,8 @@ MK_ALWAYS_INLINE int mk_shape_ok_typed_(const mk_shape *s, mk_shape_type t)
     }
 }
 
+#include "hull_support.h"
+
 static inline mk_real mk_sgn_extent_(mk_real d, mk_real h) { return d >= 0 ? h : -h; }
 
 /* Exchanges the two shapes of a pair query and their poses: dispatch tables
@@ -114,7 +116,7 @@ MK_ALWAYS_INLINE mk_vec3 mk_core_support_typed(const mk_shape *s, mk_shape_type 
         return sigma > 0 ? mk_v3(r * d.x / sigma, r * d.y / sigma, -h) : mk_v3(0, 0, -h);
     }
     case MK_SHAPE_HULL:
-        *feature = mk_hull_support_index(s->u.hull, d, *feature);
+        *feature = mk_hull_support_(s->u.hull, d, *feature);
         return s->u.hull->vertices[*feature];
     case MK_SHAPE_PLANE:
     default:
