@@ -14,8 +14,9 @@ extern "C" {
 
 typedef struct bb_minko bb_minko;
 
-/* kind: MK_BP_SAP, MK_BP_HGRID or MK_BP_AUTO. NULL on failure. */
-bb_minko *bb_minko_create(int kind, int n, const double *box, const unsigned char *is_static);
+/* kind: MK_BP_SAP, MK_BP_HGRID or MK_BP_AUTO; pairs_only as in mk_bp_def.
+ * NULL on failure. */
+bb_minko *bb_minko_create(int kind, int pairs_only, int n, const double *box, const unsigned char *is_static);
 /* One frame: new boxes for `moved`, destroy + create for `respawned`,
  * update; returns the pair count, or -1 on a Minko error (printed). */
 long bb_minko_frame(bb_minko *m, const double *box, const int *moved, int n_moved, const int *respawned, int n_respawned);

@@ -32,7 +32,7 @@ static int add(bb_minko *m, const double *box, int o)
     return 0;
 }
 
-bb_minko *bb_minko_create(int kind, int n, const double *box, const unsigned char *is_static)
+bb_minko *bb_minko_create(int kind, int pairs_only, int n, const double *box, const unsigned char *is_static)
 {
     bb_minko *m = (bb_minko *)calloc(1, sizeof *m);
     mk_bp_def d = mk_bp_default_def();
@@ -46,6 +46,7 @@ bb_minko *bb_minko_create(int kind, int n, const double *box, const unsigned cha
     m->obj = (int *)calloc((size_t)m->cap, sizeof *m->obj);
     if (!m->id || !m->obj) { bb_minko_destroy(m); return NULL; }
     d.kind = (mk_bp_kind)kind;
+    d.pairs_only = pairs_only;
     d.proxy_capacity = m->cap;
     if (report("create", mk_bp_create(&d, NULL, &m->bp))) { bb_minko_destroy(m); return NULL; }
     for (i = 0; i < n; ++i)

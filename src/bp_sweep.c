@@ -11,7 +11,7 @@
  * the next one. Row height H is the largest box extent on the row axis (a
  * little more, so rounding cannot hide a pair), so a box's partners start in
  * its own row or the next one up or down. Each box becomes one 64-bit key
- * (row, its lower end on the sweep axis quantised to 24 bits, slot) and one
+ * (row, its lower end on the sweep axis quantised to 16 bits, slot) and one
  * radix sort orders them; each row is swept alone and then merged with the
  * row above. The quantisation is monotone, so comparing quantised values
  * never stops a sweep before a box it should have met; the exact closed
@@ -25,11 +25,13 @@
 
 #include "broadphase_internal.h"
 
-#define MK_SWEEP_Q_MAX_ 0xFFFFFFu  /* 24-bit quantised positions */
+/* 16-bit quantised positions: with the row in the next byte, the radix sort
+ * takes three passes over the keys (the slot is payload, never sorted on). */
+#define MK_SWEEP_Q_MAX_ 0xFFFFu
 #define MK_SWEEP_ROWS_ 0xFFFFu     /* 16-bit row numbers */
 
 struct mk_sweep {
-    uint64_t *key, *tmp;  /* sort keys: row << 48 | q(lo) << 24 | slot */
+    uint64_t *key, *tmp;  /* sort keys: row << 40 | q(lo) << 24 | slot */
     uint32_t *qhi;        /* per sorted box: q(hi) on the sweep axis */
     mk_aabb *box;         /* per sorted box: its AABB (sequential reads in the sweep) */
     uint32_t *big;        /* slots of boxes infinite on the row axis */
@@ -71,6 +73,7 @@ void mk_sweep_destroy_(mk_bp *bp)
     bp->sweep = NULL;
 }
 
+
 static int in_structure(const mk_bp *bp, uint32_t s)
 {
     return (bp->flags[s] & (MK_PF_ALIVE | MK_PF_DYING)) == MK_PF_ALIVE;
@@ -101,23 +104,24 @@ static uint32_t row_of(const frame_ *f, double y)
     return t >= (double)MK_SWEEP_ROWS_ ? MK_SWEEP_ROWS_ : (uint32_t)t;
 }
 
-/* One pass over the boxes: axes from the spread of the finite centres;
- * ranges and the row height from the boxes finite on the row axis, kept for
- * every axis since the row axis is known only at the end. */
+/* Axes and ranges only steer the speed (any monotone quantisation and any
+ * row origin are correct), so they come from a sample of at most about 1024
+ * boxes; the row height must bound every box and takes a full pass. */
+#define MK_SWEEP_SAMPLE_ 1024
+
 typedef struct spread_ {
     double sum[3], sum2[3];
     int cnt[3];
-    double lo[3], hi[3];  /* range of the finite ends of boxes with a finite extent */
-    double ext[3];        /* largest finite extent */
+    double lo[3], hi[3];  /* range of the sampled boxes finite on that axis */
 } spread_;
 
 static void measure(const mk_bp *bp, spread_ *p)
 {
-    uint32_t s;
+    uint32_t s, stride = (uint32_t)(bp->hi_slot / MK_SWEEP_SAMPLE_ + 1);
     int k;
     memset(p, 0, sizeof *p);
     for (k = 0; k < 3; ++k) { p->lo[k] = HUGE_VAL; p->hi[k] = -HUGE_VAL; }
-    for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
+    for (s = 0; s < (uint32_t)bp->hi_slot; s += stride) {
         const mk_aabb *b = &bp->box[s];
         if (!in_structure(bp, s)) continue;
         for (k = 0; k < 3; ++k) {
@@ -126,9 +130,20 @@ static void measure(const mk_bp *bp, spread_ *p)
             p->sum[k] += c; p->sum2[k] += c * c; p->cnt[k]++;
             if (l < p->lo[k]) p->lo[k] = l;
             if (h > p->hi[k]) p->hi[k] = h;
-            if (h - l > p->ext[k]) p->ext[k] = h - l;
         }
     }
+}
+
+/* The largest finite extent on `axis`, over every box. */
+static double largest_extent(const mk_bp *bp, int axis)
+{
+    double m = 0;
+    uint32_t s;
+    for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
+        double e = hi_of(&bp->box[s], axis) - lo_of(&bp->box[s], axis);
+        if (in_structure(bp, s) && e > m && e <= MK_REAL_MAX) m = e;
+    }
+    return m;
 }
 
 static void plan(const mk_bp *bp, frame_ *f)
@@ -144,8 +159,7 @@ static void plan(const mk_bp *bp, frame_ *f)
     for (k = 0; k < 3; ++k) if (k != f->ax && var[k] > var[f->ay]) f->ay = k;
     xlo = p.lo[f->ax]; xhi = p.hi[f->ax];
     ylo = p.lo[f->ay]; yhi = p.hi[f->ay];
-    hmax = p.ext[f->ay];
-    /* Any monotone map is correct; these only spread the keys well. */
+    hmax = largest_extent(bp, f->ay);
     f->x0 = xlo <= xhi ? xlo : 0;
     f->xscale = xhi > xlo ? (double)(MK_SWEEP_Q_MAX_ - 1) / (xhi - xlo) : 0;
     if (!(f->xscale <= 1e300)) f->xscale = 0;
@@ -251,7 +265,7 @@ static int sort_keys(mk_bp *bp, const frame_ *f, int *nbig)
         const mk_aabb *b = &bp->box[s];
         if (!in_structure(bp, s)) continue;
         if (!(hi_of(b, f->ay) - lo_of(b, f->ay) <= MK_REAL_MAX)) { w->big[(*nbig)++] = s; continue; }
-        w->key[n++] = (uint64_t)row_of(f, lo_of(b, f->ay)) << 48 | (uint64_t)quantise(f, lo_of(b, f->ax)) << 24 | s;
+        w->key[n++] = (uint64_t)row_of(f, lo_of(b, f->ay)) << 40 | (uint64_t)quantise(f, lo_of(b, f->ax)) << 24 | s;
     }
     mk_sort_u64_by_(w->key, w->tmp, n, 3); /* the slot is payload: slot order breaks ties */
     for (i = 0; i < n; ++i) {
@@ -273,12 +287,12 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
     n = sort_keys(bp, &f, &nbig);
     c.bp = bp; c.w = bp->sweep; c.report = report;
     for (s = 0; s < n; s = e) {
-        uint64_t row = c.w->key[s] >> 48;
+        uint64_t row = c.w->key[s] >> 40;
         int u;
-        for (e = s + 1; e < n && c.w->key[e] >> 48 == row; ++e) {}
+        for (e = s + 1; e < n && c.w->key[e] >> 40 == row; ++e) {}
         if ((st = sweep_row(&c, s, e)) != MK_OK) return st;
-        if (e == n || c.w->key[e] >> 48 != row + 1) continue;
-        for (u = e + 1; u < n && c.w->key[u] >> 48 == row + 1; ++u) {}
+        if (e == n || c.w->key[e] >> 40 != row + 1) continue;
+        for (u = e + 1; u < n && c.w->key[u] >> 40 == row + 1; ++u) {}
         if ((st = sweep_rows(&c, s, e, e, u)) != MK_OK) return st;
     }
     return sweep_big(&c, n, nbig);

@@ -270,9 +270,13 @@ void *mk_bp_user(const mk_bp *bp, mk_bp_id id)
 
 int mk_bp_filter_pass_(const mk_bp *bp, uint32_t a, uint32_t b)
 {
-    uint64_t ab = bp->cat[a] & bp->mask[b], ba = bp->cat[b] & bp->mask[a];
-    if (bp->def.filter_mode == MK_BP_FILTER_AND && !(ab && ba)) return 0;
-    if (bp->def.filter_mode == MK_BP_FILTER_OR && !(ab || ba)) return 0;
+    uint64_t ab, ba;
+    if (bp->def.filter_mode != MK_BP_FILTER_NONE) { /* the words are read only when they matter */
+        ab = bp->cat[a] & bp->mask[b];
+        ba = bp->cat[b] & bp->mask[a];
+        if (bp->def.filter_mode == MK_BP_FILTER_AND && !(ab && ba)) return 0;
+        if (bp->def.filter_mode == MK_BP_FILTER_OR && !(ab || ba)) return 0;
+    }
     if (bp->def.filter)
         return bp->def.filter(bp->def.filter_ctx, mk_bp_id_of_(bp, a), bp->user[a], mk_bp_id_of_(bp, b), bp->user[b]) != 0;
     return 1;
@@ -306,22 +310,44 @@ static void observe_motion(mk_bp *bp)
         e = mk_v3_sub(bp->box[s].hi, bp->box[s].lo);
         if (d.x > e.x || d.y > e.y || d.z > e.z) ++far;
     }
+    if (bp->frames_since_choice == 0) { /* the first sample: nothing to smooth with */
+        bp->moved_share = moved / n;
+        bp->far_share = far / n;
+        return;
+    }
     bp->moved_share = 0.5 * bp->moved_share + 0.5 * (moved / n);
     bp->far_share = 0.5 * bp->far_share + 0.5 * (far / n);
 }
 
-/* SAP's insertion sort pays per endpoint crossed, and that grows with n^(1/3)
- * per box even for uniform scenes: it wins only on small coherent scenes (up
- * to about 100 moving boxes: measured 2.4 against 3.3 us at 64 cubes, 9 against
- * 13 us the other way at 256). The grid's cost does not grow with crowding
- * along an axis or with incoherent motion (demos/bench_broadphase). */
-static mk_bp_kind auto_choice(const mk_bp *bp)
+/* The choice, from what was measured on this scene (shares of movers, of
+ * teleports and of statics, SAP's swap counts) against what was measured on
+ * the benchmarks (demos/bench_broadphase, 10k proxies; bullet_scenes,
+ * ode_scenes):
+ *  - incoherent motion (over 2% of the proxies jump farther than their size
+ *    in an update, or SAP's swaps ran over budget since the last choice):
+ *    the grid, whose cost does not grow with it (teleport: 5.2 ms against
+ *    SAP's 12.6) -- but for a caller that wants the set only (pairs_only)
+ *    SAP, whose stateless sweep does not care how far things moved
+ *    (teleport: 2.9 ms; ODE's 10 000-sphere heap: the grid is 14x slower),
+ *    unless most proxies are static (the grid's static index costs nothing
+ *    per update; a sweep sorts the statics every time);
+ *  - few movers (under ~100, or under 5% with few statics): SAP, which
+ *    costs nothing when nothing moved (Bullet's 1000-box stack at rest:
+ *    0.036 ms a step against the grid's 0.072);
+ *  - many movers (over 20%): the grid (uniform, mixed, wall, churn: 1.1 to
+ *    2.5 ms against SAP's 3.1 to 7.0);
+ *  - in between, the structure in use stays: a switch costs a rebuild. */
+static mk_bp_kind auto_choice(const mk_bp *bp, int sap_lost_coherence)
 {
-    int dynamic = bp->live - bp->statics;
+    double movers = bp->moved_share * bp->live;
+    int dynamic = bp->live - bp->statics, few_statics = 2 * bp->statics < bp->live;
     if (!kind_available(MK_BP_SAP)) return kind_available(MK_BP_HGRID) ? MK_BP_HGRID : MK_BP_BRUTE;
     if (!kind_available(MK_BP_HGRID)) return MK_BP_SAP;
-    if (dynamic <= 96 && bp->far_share < 0.02) return MK_BP_SAP;
-    return MK_BP_HGRID;
+    if (bp->far_share >= 0.02 || sap_lost_coherence)
+        return bp->def.pairs_only && few_statics ? MK_BP_SAP : MK_BP_HGRID;
+    if (dynamic <= 96 || movers <= 96 || (bp->moved_share < 0.05 && few_statics)) return MK_BP_SAP;
+    if (bp->moved_share > 0.2) return MK_BP_HGRID;
+    return bp->kind == MK_BP_BRUTE ? MK_BP_SAP : bp->kind;
 }
 
 static void auto_choose(mk_bp *bp)
@@ -329,10 +355,20 @@ static void auto_choose(mk_bp *bp)
     mk_bp_kind want;
     if (bp->def.kind != MK_BP_AUTO) return;
     /* Sample the motion every 8th update and decide every 32nd (the first
-     * included): a switch costs a rebuild, and the sampling is not free. */
+     * included) and at the 8th, the first that saw motion rather than
+     * creation: a switch costs a rebuild, and the sampling is not free. */
     if (bp->frames_since_choice % 8 == 0) observe_motion(bp);
-    if (bp->frames_since_choice++ % 32 != 0) return;
-    want = auto_choice(bp);
+    if (bp->frames_since_choice % 32 != 0 && bp->frames_since_choice != 8) {
+        bp->frames_since_choice++;
+        return;
+    }
+    bp->frames_since_choice++;
+    /* One full sort is the rebuild after a switch; more, or stateless
+     * sweeps, mean the insertion sorts lost coherence. */
+    want = auto_choice(bp, bp->kind == MK_BP_SAP && (bp->full_rebuilds - bp->rebuilds_at_choice > 1 ||
+                                                     bp->sweeps > bp->sweeps_at_choice));
+    bp->rebuilds_at_choice = bp->full_rebuilds;
+    bp->sweeps_at_choice = bp->sweeps;
     if (want == bp->kind) return;
     destroy_structures(bp);
     bp->kind = want;

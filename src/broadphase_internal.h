@@ -77,6 +77,7 @@ struct mk_bp {
     int switches, full_rebuilds;
     int sweeps;               /* updates answered by the stateless sweep */
     int frames_since_choice;
+    int rebuilds_at_choice, sweeps_at_choice; /* AUTO: full_rebuilds and sweeps when it last chose */
     double moved_share, far_share;  /* AUTO: smoothed motion statistics */
     struct mk_sap *sap;
     struct mk_hgrid *grid;

@@ -31,8 +31,9 @@ struct mk_sap {
     uint32_t *active[2], *active_pos; /* sweep: [0] dynamic, [1] static */
     int active_count[2];
     long long swaps;        /* last update */
-    int sweep_wait;         /* pairs_only: stateless updates left before insertion sorts are tried again */
+    int sweep_wait;         /* pairs_only: stateless updates left before insertion sorts may be tried again */
     int sweep_backoff;      /* pairs_only: the next wait, doubled each time they fail */
+    int sweep_overdue;      /* pairs_only: stateless updates since the wait ran out (the scene stayed busy) */
     mk_real maxw;           /* >= every finite x width among proxies with finite lo.x */
 };
 
@@ -374,6 +375,23 @@ static long long swap_budget(const mk_bp *bp)
 
 #define MK_SAP_MAX_WAIT_ 64
 
+/* pairs_only, with stale arrays: go on with stateless sweeps, or rebuild
+ * and try insertion sorts again? Again once the wait is over and the scene
+ * is calm (fewer than half the proxies changed): a rebuild costs a few
+ * sweeps, and a busy scene (ODE's exploding heap) would only lose again. A
+ * scene that stays busy is retried every 4 * MK_SAP_MAX_WAIT_ updates. */
+static int keep_sweeping(mk_bp *bp)
+{
+    struct mk_sap *s = bp->sap;
+    if (s->sweep_wait > 0) {
+        s->sweep_wait--;
+        return 1;
+    }
+    if (2 * bp->dirty_count >= bp->live && ++s->sweep_overdue < 4 * MK_SAP_MAX_WAIT_) return 1;
+    s->sweep_overdue = 0;
+    return 0;
+}
+
 /* Insertion sorts lost to incoherent motion: with pairs_only, answer by
  * stateless sweeps for a while (longer after each loss), else rebuild. */
 static mk_status lost_coherence(mk_bp *bp)
@@ -398,10 +416,7 @@ mk_status mk_sap_update_(mk_bp *bp)
     s = bp->sap;
     s->swaps = 0;
     mk_bp_commit_(bp);
-    if (bp->rebuild && bp->def.pairs_only && s->sweep_wait > 0) {
-        s->sweep_wait--;
-        return sweep_set(bp);
-    }
+    if (bp->rebuild && bp->def.pairs_only && keep_sweeping(bp)) return sweep_set(bp);
     if (bp->rebuild) return rebuild(bp);
     for (r = 0; r < bp->dirty_count; ++r) {
         uint32_t slot = bp->dirty[r];

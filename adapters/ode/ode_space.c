@@ -23,6 +23,7 @@
  *    stay in the broadphase and are filtered out of its pairs, which gives
  *    the same set as skipping them.
  */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -159,13 +160,13 @@ static mk_real round_up(dReal x)
 }
 
 /* The broadphase refuses NaN and inverted boxes; ODE never separates a NaN
- * bound, so such a geom is treated as filling all space. */
-static mk_aabb to_mk_aabb(const dReal *b)
+ * bound, so such an axis is treated as filling all space. `grow` widens
+ * each side (0 for the exact box); the result contains the dReal box. */
+static mk_aabb to_mk_aabb_grown(const dReal *b, dReal grow)
 {
     mk_aabb box;
-    mk_real inf = (mk_real)HUGE_VAL;
+    mk_real inf = (mk_real)HUGE_VAL, *lo = &box.lo.x, *hi = &box.hi.x;
     int k;
-    mk_real lo[3], hi[3];
     for (k = 0; k < 3; k++) {
         dReal l = b[2 * k], h = b[2 * k + 1];
         if (!(l <= h)) {
@@ -173,15 +174,15 @@ static mk_aabb to_mk_aabb(const dReal *b)
             hi[k] = inf;
             continue;
         }
-        lo[k] = round_down(l);
-        hi[k] = round_up(h);
+        lo[k] = round_down(l - grow); /* inf - grow stays inf */
+        hi[k] = round_up(h + grow);
         if (lo[k] == inf) lo[k] = MK_REAL_MAX;
         if (hi[k] == -inf) hi[k] = -MK_REAL_MAX;
     }
-    box.lo = mk_v3(lo[0], lo[1], lo[2]);
-    box.hi = mk_v3(hi[0], hi[1], hi[2]);
     return box;
 }
+
+static mk_aabb to_mk_aabb(const dReal *b) { return to_mk_aabb_grown(b, 0); }
 
 /* The dReal box inside the proxy's box, compared exactly (a float mk_real
  * widens to dReal without rounding); NaN bounds are never inside. */
@@ -191,15 +192,16 @@ static int inside_fat(const dReal *b, const mk_aabb *fat)
            (dReal)fat->lo.z <= b[4] && b[5] <= (dReal)fat->hi.z;
 }
 
-static mk_aabb fatten(mk_aabb b)
+/* The proxy's box: the geom's grown by FAT_MARGIN of its largest finite extent. */
+static mk_aabb fat_box(const dReal *b)
 {
-    mk_vec3 e = mk_v3_sub(b.hi, b.lo);
-    mk_real size = 0, m;
-    if (mk_real_is_valid(e.x)) size = mk_max(size, e.x);
-    if (mk_real_is_valid(e.y)) size = mk_max(size, e.y);
-    if (mk_real_is_valid(e.z)) size = mk_max(size, e.z);
-    m = FAT_MARGIN * size;
-    return mk_aabb_make(mk_v3_sub(b.lo, mk_v3(m, m, m)), mk_v3_add(b.hi, mk_v3(m, m, m))); /* inf - m stays inf */
+    dReal size = 0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        dReal e = b[2 * k + 1] - b[2 * k];
+        if (e > size && e <= DBL_MAX) size = e;
+    }
+    return to_mk_aabb_grown(b, FAT_MARGIN * size);
 }
 
 /* ---- per-space state ---- */
@@ -310,7 +312,7 @@ static mk_status add_entry(space_state *st, dGeomID g, const dReal *box, long *o
     memset(e, 0, sizeof *e);
     e->geom = g;
     memcpy(e->aabb, box, sizeof e->aabb);
-    e->fat = fatten(to_mk_aabb(box));
+    e->fat = fat_box(box);
     s = mk_bp_create_proxy(st->bp, e->fat, slot_user(slot), ~(uint64_t)0, ~(uint64_t)0, 0, &e->proxy);
     if (s == MK_OK && mk_ode_map_put(&st->index, g, NULL, (uint32_t)slot) != 0) {
         mk_bp_destroy_proxy(st->bp, e->proxy);
@@ -363,7 +365,7 @@ static mk_status sync(space_state *st)
             e = &st->entries[slot];
             memcpy(e->aabb, box, sizeof box);
             if (!inside_fat(box, &e->fat)) {
-                e->fat = fatten(to_mk_aabb(box));
+                e->fat = fat_box(box);
                 s = mk_bp_move_proxy(st->bp, e->proxy, e->fat);
                 if (s != MK_OK) return s;
             }
