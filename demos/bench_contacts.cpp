@@ -13,6 +13,9 @@
 //   stacked  a unit box resting on another, tilted by up to 2 degrees, turned
 //            about the vertical, 0.1 to 50 mm deep: the face contacts of stacking
 //   random   boxes of half-extents 0.1 to 1, random orientations, overlapping
+//   apart    the same boxes separated (up to 0.5) with overlapping world AABBs:
+//            what a broadphase hands over that has no contact; accuracy is
+//            then only "no point reported" (a point is a failure)
 // Per family and backend: ns per query (best of several timed loops over all
 // cases, same pose repeated as in a resting contact, after one untimed pass
 // that warms every per-pair state; the accuracy columns judge the answers of
@@ -23,7 +26,7 @@
 // mean points per manifold. JSON Lines per ../shared/BENCH_FORMAT.md (suite
 // "contacts", case "box_box") plus a table.
 //
-//   bench_contacts [--quick] [--json FILE] [--family stacked|random] [--backend NAME]
+//   bench_contacts [--quick] [--json FILE] [--family stacked|random|apart] [--backend NAME]
 // (--family runs one case family, --backend one backend (a prefix of its
 // name: minko, minko.cold, bullet, ode), e.g. for callgrind instruction
 // counts; ratios are then to that backend.)
@@ -70,6 +73,7 @@ struct Answer {
     double depth = 0;     // deepest point's penetration
     double normal[3] = {0, 0, 0};
     bool failed = false;
+    bool error = false;   // an error status (Minko)
 };
 
 struct Backend {
@@ -86,13 +90,34 @@ mk_quat tilt_quat(mk_rng *r, double max_tilt)
     return mk_quat_mul(tilt, yaw);
 }
 
-bool finish_case(Case &c)
+// Half-extents of the world AABB of a box.
+mk_vec3 aabb_half(mk_vec3 h, mk_quat q)
+{
+    mk_mat3 R = mk_mat3_from_quat(q);
+    return mk_v3(std::fabs(R.c0.x) * h.x + std::fabs(R.c1.x) * h.y + std::fabs(R.c2.x) * h.z,
+                 std::fabs(R.c0.y) * h.x + std::fabs(R.c1.y) * h.y + std::fabs(R.c2.y) * h.z,
+                 std::fabs(R.c0.z) * h.x + std::fabs(R.c1.z) * h.y + std::fabs(R.c2.z) * h.z);
+}
+
+bool aabbs_overlap(const Case &c)
+{
+    mk_vec3 ea = aabb_half(c.ha, c.xa.q), eb = aabb_half(c.hb, c.xb.q), d = mk_v3_sub(c.xb.p, c.xa.p);
+    return std::fabs(d.x) <= ea.x + eb.x && std::fabs(d.y) <= ea.y + eb.y && std::fabs(d.z) <= ea.z + eb.z;
+}
+
+bool finish_case(Case &c, bool apart)
 {
     mk_shape a, b;
     mk_oracle_result o;
     mk_shape_box(c.ha, 0, &a);
     mk_shape_box(c.hb, 0, &b);
-    if (mk_oracle_distance(&a, c.xa, &b, c.xb, &o) != 0 || !(o.distance < -1e-6)) return false;
+    if (mk_oracle_distance(&a, c.xa, &b, c.xb, &o) != 0) return false;
+    if (apart) {
+        c.depth = -double(o.distance);
+        c.normal_defined = false;
+        return o.distance > 1e-6 && o.distance < 0.5 && aabbs_overlap(c);
+    }
+    if (!(o.distance < -1e-6)) return false;
     c.depth = -double(o.distance);
     c.normal[0] = double(o.normal.x);
     c.normal[1] = double(o.normal.y);
@@ -121,9 +146,10 @@ std::vector<Case> make_cases(const char *family, int n, uint64_t seed)
             c.hb = mk_rng_v3(&r, 0.1, 1);
             c.xa = mk_transform_make(mk_rng_v3(&r, -10, 10), mk_rng_quat(&r));
             mk_real reach = mk_v3_len(c.ha) + mk_v3_len(c.hb);
-            c.xb = mk_transform_make(mk_v3_mad(c.xa.p, (mk_real)mk_rng_range(&r, 0.1, 0.9) * reach, mk_rng_dir(&r)), mk_rng_quat(&r));
+            double lo = strcmp(family, "apart") ? 0.1 : 0.5, hi = strcmp(family, "apart") ? 0.9 : 1.1;
+            c.xb = mk_transform_make(mk_v3_mad(c.xa.p, (mk_real)mk_rng_range(&r, lo, hi) * reach, mk_rng_dir(&r)), mk_rng_quat(&r));
         }
-        if (finish_case(c)) out.push_back(c);
+        if (finish_case(c, !strcmp(family, "apart"))) out.push_back(c);
     }
     return out;
 }
@@ -147,6 +173,7 @@ struct MinkoRun {
         mk_manifold m;
         mk_status st = mk_collide(&a[i], cs[i].xa, &b[i], cs[i].xb, 0, warm ? &cache[i] : nullptr, &m);
         if (!ans) return;
+        ans->error = st != MK_OK;
         ans->failed = st != MK_OK || m.count == 0;
         if (ans->failed) return;
         ans->count = m.count;
@@ -354,8 +381,13 @@ void report(FILE *jf, const char *family, const std::vector<Case> &cs, const std
         std::vector<double> rel, ang;
         int failures = 0;
         double points = 0;
+        const bool apart = !strcmp(family, "apart");
         for (size_t i = 0; i < cs.size(); ++i) {
             const Answer &a = be.answers[i];
+            if (apart) { // no contact is the right answer: a reported point (or an error) is the failure
+                failures += a.count > 0 || a.error;
+                continue;
+            }
             if (a.failed) {
                 failures++;
                 continue;
@@ -403,7 +435,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--family") && i + 1 < argc) only = argv[++i];
         else if (!strcmp(argv[i], "--backend") && i + 1 < argc) backend = argv[++i];
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--family stacked|random] [--backend NAME]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--family stacked|random|apart] [--backend NAME]\n", argv[0]);
             return 2;
         }
     }
@@ -422,10 +454,10 @@ int main(int argc, char **argv)
     const char *bullet_detector = sizeof(btScalar) == 8 ? "bullet_f64.btBoxBoxDetector" : "bullet_f32.btBoxBoxDetector";
     const char *bullet_algorithm =
         sizeof(btScalar) == 8 ? "bullet_f64.btBoxBoxCollisionAlgorithm" : "bullet_f32.btBoxBoxCollisionAlgorithm";
-    const char *families[] = {"stacked", "random"};
+    const char *families[] = {"stacked", "random", "apart"};
     for (const char *fam : families) {
         if (only && strcmp(only, fam)) continue;
-        std::vector<Case> cs = make_cases(fam, n, fam[0] == 's' ? 1 : 2);
+        std::vector<Case> cs = make_cases(fam, n, fam[0] == 's' ? 1 : fam[0] == 'r' ? 2 : 3);
         std::vector<Backend> bes;
         {
             MinkoRun run(cs, true), cold(cs, false);

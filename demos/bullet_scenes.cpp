@@ -6,8 +6,10 @@
 //
 // Per scene and backend it reports: median ms per step (total, collision phase,
 // broadphase part), mean pairs / manifolds with >= 1 point / contact points per
-// step, the deepest penetration seen (judged by one fixed referee for every
-// backend: Bullet's GJK-EPA signed distance on the tight-AABB-overlapping pairs),
+// step, the deepest penetration seen over the run (max_pen, mostly impacts) and
+// at the last step (pen_end, at rest where the scene settles), both judged by
+// one fixed referee for every backend (Bullet's GJK-EPA signed distance or the
+// exact oracle on the tight-AABB-overlapping pairs),
 // fallen bodies and drift, kinetic energy at the end, tunnelled bodies, and how
 // far the end state is from the native run's. A body has fallen when it ends
 // lower than where drift measurement started by more than half its height (a
@@ -595,6 +597,7 @@ struct Result {
     double ms_mean = 0, collision_ms_mean = 0;            // means: sleeping makes the medians bimodal
     double pairs = 0, manifolds = 0, points = 0;        // means per step
     double max_penetration = 0, drift = -1, ke_end = 0;
+    double end_penetration = 0;                          // deepest at the last step (at rest, if the scene settles)
     double fallen = -1;                                  // bodies that fell (-1: not measured)
     int tunnelled = 0, referee_failures = 0;
     double divergence = -1;                              // max |p - p_native| at the end
@@ -764,9 +767,11 @@ public:
             m_sum_manifolds += n > 0;
             m_sum_points += n;
         }
-        if (g_referee && (step % m_scene.judge_every == 0 || step == m_steps - 1))
-            m_res.max_penetration =
-                std::max(m_res.max_penetration, referee_penetration(world, &m_referee, &m_res.referee_failures));
+        if (g_referee && (step % m_scene.judge_every == 0 || step == m_steps - 1)) {
+            const double deepest = referee_penetration(world, &m_referee, &m_res.referee_failures);
+            m_res.max_penetration = std::max(m_res.max_penetration, deepest);
+            if (step == m_steps - 1) m_res.end_penetration = deepest;
+        }
     }
 
     Result finish()
@@ -871,7 +876,7 @@ Result median_of(const std::vector<Result> &trials)
     };
     for (double Result::*f : {&Result::ms, &Result::collision_ms, &Result::broadphase_ms, &Result::ms_mean,
                               &Result::collision_ms_mean, &Result::pairs, &Result::manifolds, &Result::points,
-                              &Result::max_penetration, &Result::drift, &Result::fallen, &Result::ke_end,
+                              &Result::max_penetration, &Result::end_penetration, &Result::drift, &Result::fallen, &Result::ke_end,
                               &Result::divergence})
         r.*f = med(f);
     r.referee_failures = 0;
@@ -887,9 +892,9 @@ Result median_of(const std::vector<Result> &trials)
 
 void print_header()
 {
-    std::printf("%-13s %-13s %-20s %5s %5s %9s %9s %9s %6s %8s %8s %8s %10s %5s %10s %10s %4s %10s\n", "scene",
+    std::printf("%-13s %-13s %-20s %5s %5s %9s %9s %9s %6s %8s %8s %8s %10s %10s %5s %10s %10s %4s %10s\n", "scene",
                 "variant", "backend", "bodies", "steps", "ms/step", "coll_ms", "bp_ms", "coll/n", "pairs", "manif",
-                "points", "max_pen", "fell", "drift", "ke_end", "tun", "div_native");
+                "points", "max_pen", "pen_end", "fell", "drift", "ke_end", "tun", "div_native");
 }
 
 void print_row(const SceneSpec &s, const Result &r, const Result &native)
@@ -899,9 +904,9 @@ void print_row(const SceneSpec &s, const Result &r, const Result &native)
     if (r.fallen >= 0) std::snprintf(fell, sizeof fell, "%.3g", r.fallen);
     if (r.divergence >= 0) std::snprintf(div, sizeof div, "%.3g", r.divergence);
     if (native.collision_ms > 0) std::snprintf(ratio, sizeof ratio, "%.2f", r.collision_ms / native.collision_ms);
-    std::printf("%-13s %-13s %-20s %5d %5d %9.3f %9.3f %9.3f %6s %8.1f %8.1f %8.1f %10.3g %5s %10s %10.3g %4d %10s\n",
+    std::printf("%-13s %-13s %-20s %5d %5d %9.3f %9.3f %9.3f %6s %8.1f %8.1f %8.1f %10.3g %10.3g %5s %10s %10.3g %4d %10s\n",
                 s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.bodies, r.steps, r.ms, r.collision_ms,
-                r.broadphase_ms, ratio, r.pairs, r.manifolds, r.points, r.max_penetration, fell, drift, r.ke_end,
+                r.broadphase_ms, ratio, r.pairs, r.manifolds, r.points, r.max_penetration, r.end_penetration, fell, drift, r.ke_end,
                 r.tunnelled, div);
     if (r.referee_failures) std::printf("    (referee: %d pairs it could not judge)\n", r.referee_failures);
     if (r.minko_pairs >= 0 && r.native_pairs > 0)
@@ -915,10 +920,10 @@ void write_json(FILE *f, const SceneSpec &s, const Result &r)
                  "{\"suite\":\"bullet\",\"case\":\"%s\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":%d,\"bodies\":%d,"
                  "\"ms_per_frame\":%.6g,\"collision_ms_per_frame\":%.6g,\"space_ms_per_frame\":%.6g,"
                  "\"ms_per_frame_mean\":%.6g,\"collision_ms_per_frame_mean\":%.6g,"
-                 "\"pairs\":%.6g,\"manifolds\":%.6g,\"points\":%.6g,\"max_penetration\":%.6g,\"ke_end\":%.6g,"
+                 "\"pairs\":%.6g,\"manifolds\":%.6g,\"points\":%.6g,\"max_penetration\":%.6g,\"end_penetration\":%.6g,\"ke_end\":%.6g,"
                  "\"tunnelled\":%d",
                  s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.steps, r.bodies, r.ms, r.collision_ms,
-                 r.broadphase_ms, r.ms_mean, r.collision_ms_mean, r.pairs, r.manifolds, r.points, r.max_penetration, r.ke_end, r.tunnelled);
+                 r.broadphase_ms, r.ms_mean, r.collision_ms_mean, r.pairs, r.manifolds, r.points, r.max_penetration, r.end_penetration, r.ke_end, r.tunnelled);
     if (r.trials > 1) std::fprintf(f, ",\"trials\":%d", r.trials);
     if (r.drift >= 0) std::fprintf(f, ",\"drift\":%.6g", r.drift);
     if (r.fallen >= 0) std::fprintf(f, ",\"fallen\":%.6g", r.fallen);
@@ -941,6 +946,7 @@ void usage(const char *argv0)
                  "  --steps N    override every scene's step count\n"
                  "  --trials N   run each scene N times, starts perturbed by 1e-3 of each body's size\n"
                  "               from the second on; every figure is the median over the trials\n"
+                 "  --per-trial  also print every trial's row (backend#trial; the table only)\n"
                  "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n",
                  argv0);
 }
@@ -949,7 +955,7 @@ void usage(const char *argv0)
 
 int main(int argc, char **argv)
 {
-    bool quick = false, list = false, no_native = false;
+    bool quick = false, list = false, no_native = false, per_trial = false;
     const char *json = nullptr;
     int steps_override = 0, trials = 1;
     std::vector<std::string> only_scenes, only_backends;
@@ -964,6 +970,7 @@ int main(int argc, char **argv)
         else if (a == "--backend" && i + 1 < argc) only_backends.push_back(argv[++i]);
         else if (a == "--steps" && i + 1 < argc) steps_override = std::atoi(argv[++i]);
         else if (a == "--trials" && i + 1 < argc) trials = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--per-trial") per_trial = true;
         else if (a == "--bp" && i + 1 < argc) {
             std::string k = argv[++i];
             g_bp_kind = k == "sap" ? MK_BP_SAP : k == "hgrid" ? MK_BP_HGRID : k == "brute" ? MK_BP_BRUTE : MK_BP_AUTO;
@@ -1028,6 +1035,13 @@ int main(int argc, char **argv)
                         r.divergence = std::max(r.divergence, (double)(r.end_pos[i] - native.end_pos[i]).length());
                 }
         }
+        if (per_trial)
+            for (size_t k = 0; k < picked.size(); k++)
+                for (int t = 0; t < trials; t++) {
+                    Result r = per_backend[k][(size_t)t];
+                    r.backend += "#" + std::to_string(t);
+                    print_row(scene, r, per_backend[0][(size_t)t]);
+                }
         Result native;
         for (size_t k = 0; k < picked.size(); k++) {
             Result r = median_of(per_backend[k]);

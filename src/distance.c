@@ -205,7 +205,7 @@ static int face_witness(mk_vec3 hf, mk_vec3 ho, const mk_mat3 *r_o, mk_vec3 t_o,
 }
 
 /* Face witnesses with A as the box B's supporting corner projects on. */
-static int face_witness_on_a(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+MK_ALWAYS_INLINE int face_witness_on_a(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
 {
     int f = -1;
     *pb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &f)), p->t);
@@ -213,7 +213,7 @@ static int face_witness_on_a(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol
 }
 
 /* The same with B as the face box, worked in B's frame with A's corner. */
-static int face_witness_on_b(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+MK_ALWAYS_INLINE int face_witness_on_b(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
 {
     mk_mat3 rt = mk_mat3_transpose(p->r);
     mk_vec3 tb = mk_v3_neg(mk_mat3_tmul_v3(p->r, p->t)), nb = mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), qa, qb;
@@ -344,7 +344,7 @@ static int box_box_sat(const mk_pair *p, answer *ans)
     d = box_face_axes(p, &n, &of_b);
     /* B's corner under A's face, or A's under B's: the other side almost never
      * holds off parallel faces, which SAT's path below still tries. */
-    if (!(d > 0) || !(of_b ? face_witness_on_b : face_witness_on_a)(p, d, n, tol, &pa, &pb)) {
+    if (!(d > 0) || !(of_b ? face_witness_on_b(p, d, n, tol, &pa, &pb) : face_witness_on_a(p, d, n, tol, &pa, &pb))) {
         mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
         d = s.best;
         n = s.normal;

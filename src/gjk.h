@@ -69,24 +69,27 @@ typedef struct mk_gjk_result {
 /* 2 / |q|^2 for a quaternion accepted by the pose check (e = |q|^2 - 1 within
  * MK_QUAT_TOLERANCE): 2 (1 - e + e^2) is off by 2 e^3, below the rounding of
  * either precision (2e-18 in double, 2e-12 in float), and it keeps a division
- * off the head of every query's dependency chain. */
+ * off the head of every query's dependency chain; summed as (2 - 2e) + e 2e,
+ * its two terms are formed side by side rather than nested. */
 MK_ALWAYS_INLINE mk_real mk_two_over_len2(mk_quat q)
 {
-    mk_real e = mk_quat_len2(q) - 1;
-    return 2 * (1 - e * (1 - e));
+    mk_real e = mk_quat_len2(q) - 1, e2 = e + e;
+    return (2 - e2) + e * e2;
 }
 
 /* Rotation matrix of a quaternion that is unit only to within
  * MK_QUAT_TOLERANCE: the usual formula with 2/|q|^2 in place of 2 is an exact
- * rotation for any such q, so no square root and no renormalised copy. */
+ * rotation for any such q, so no square root and no renormalised copy. The
+ * products come first and the scale last, so they need not wait for
+ * 2/|q|^2: every pose-to-matrix conversion starts a query's chain of
+ * dependent operations. */
 MK_ALWAYS_INLINE mk_mat3 mk_rotation_of(mk_quat q)
 {
     mk_real s = mk_two_over_len2(q);
-    mk_real xs = q.x * s, ys = q.y * s, zs = q.z * s;
-    mk_real xx = q.x * xs, yy = q.y * ys, zz = q.z * zs, xy = q.x * ys, xz = q.x * zs, yz = q.y * zs;
-    mk_real wx = q.w * xs, wy = q.w * ys, wz = q.w * zs;
-    return mk_mat3_cols(mk_v3(1 - (yy + zz), xy + wz, xz - wy), mk_v3(xy - wz, 1 - (xx + zz), yz + wx),
-                        mk_v3(xz + wy, yz - wx, 1 - (xx + yy)));
+    mk_real xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z, xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
+    mk_real wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+    return mk_mat3_cols(mk_v3(1 - s * (yy + zz), s * (xy + wz), s * (xz - wy)), mk_v3(s * (xy - wz), 1 - s * (xx + zz), s * (yz + wx)),
+                        mk_v3(s * (xz + wy), s * (yz - wx), 1 - s * (xx + yy)));
 }
 
 /* The image of the local z axis (capsule, cylinder and cone axes): the

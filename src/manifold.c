@@ -323,6 +323,13 @@ static mk_status apart(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 }
 #endif
 
+/* cache->axis above this: the pair was apart beyond the margin last frame
+ * along the SAT axis of kind axis - APART_HINT, whose indices a and b + 1
+ * are kept in cache->reference and cache->face (which a polytope pair
+ * does not otherwise carry across frames). A pair that stays apart then
+ * costs one axis (mk_sat_options.first). */
+#define APART_HINT 4
+
 /* Whether two polytopes (boxes, hulls) are farther apart than the margin by
  * their bounding balls about their origins: then nothing else is needed,
  * not even their rotations. Broadphase pairs of boxes that only overlap in
@@ -350,14 +357,24 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     mk_sat_options opt;
     mk_sat_result sat;
     mk_feat ref, inc;
+    opt = mk_sat_defaults();
     opt.stop_above = m->margin + ra + rb;
+    if (cache && cache->axis > APART_HINT) {
+        /* Apart last frame: that axis first, and nothing else is carried. */
+        opt.first = (mk_sat_kind)(cache->axis - APART_HINT);
+        opt.first_a = cache->reference;
+        opt.first_b = (int)cache->face - 1;
+        cache->axis = cache->reference = 0;
+        cache->face = 0;
+    }
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
     opt.prefer_rel = MK_SAT_PREFER_REL;
     mk_box_hull va, vb;
     const mk_hull *ha = a->u.hull, *hb = b->u.hull;
     int boxes = a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX;
-    opt.prefer_abs = MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
-                                                b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
+    opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0
+                                               : MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
+                                                                            b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
     if (boxes) {
         mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p->r, p->t, &opt, &sat);
         if (sat.kind == MK_SAT_EDGES) box_face_axis(p, &sat);
@@ -375,8 +392,15 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
         mk_sat(ha, hb, &p->r, p->t, &opt, &sat);
         if (sat.kind == MK_SAT_EDGES) face_axis(ha, hb, p, &sat);
     }
-    if (cache) cache->axis = sat.best - ra - rb > m->margin ? MK_SAT_NONE : (int)sat.kind;
-    if (sat.best - ra - rb > m->margin) return MK_OK;
+    if (sat.best - ra - rb > m->margin) {
+        if (cache) {
+            cache->axis = APART_HINT + (int)sat.kind;
+            cache->reference = sat.a;
+            cache->face = (mk_feature)(sat.b + 1);
+        }
+        return MK_OK;
+    }
+    if (cache) cache->axis = (int)sat.kind;
     m->normal = sat.normal;
     m->cores_apart = sat.separation > 0;
     if (boxes && sat.kind != MK_SAT_EDGES) {

@@ -1,5 +1,6 @@
 /* sat.c: separating-axis test for convex polytopes (see sat.h). */
 #include "sat.h"
+#include "polytope.h"
 #include "shape_internal.h"
 
 /* Edge pairs closer to parallel than this (as the sine of their angle) are
@@ -33,6 +34,8 @@ mk_sat_options mk_sat_defaults(void)
     o.prefer = MK_SAT_NONE;
     o.prefer_rel = 0;
     o.prefer_abs = 0;
+    o.first = MK_SAT_NONE;
+    o.first_a = o.first_b = -1;
     return o;
 }
 
@@ -54,19 +57,33 @@ static void offer(sat_ctx *c, sat_axis *best, mk_real sep, int ia, int ib, mk_ve
     if (sep > c->stop) c->stopped = 1;
 }
 
-/* Separation along A's face normals: the deepest vertex of B under each face.
- * Consecutive faces' answers are close, so each support query starts from
- * the last one. */
+/* Separation along A's face i: the deepest vertex of B under it, searched
+ * from vertex *hint (-1: anywhere), which is then that vertex. */
+static void face_of_a(sat_ctx *c, int i, int *hint)
+{
+    mk_plane pl = c->a->planes[i];
+    int v = *hint = mk_hull_support_index(c->b, mk_mat3_tmul_v3(c->R, mk_v3_neg(pl.normal)), *hint);
+    mk_vec3 w = mk_v3_add(mk_mat3_mul_v3(c->R, c->b->vertices[v]), c->t);
+    offer(c, &c->face_a, mk_v3_dot(pl.normal, w) - pl.offset, i, -1, pl.normal);
+}
+
+/* Separation along A's face normals. Consecutive faces' answers are close,
+ * so each support query starts from the last one. */
 static void faces_of_a(sat_ctx *c)
 {
-    const mk_hull *a = c->a, *b = c->b;
     int i, hint = -1;
-    for (i = 0; i < a->face_count && !c->stopped; ++i) {
-        mk_plane pl = a->planes[i];
-        int v = hint = mk_hull_support_index(b, mk_mat3_tmul_v3(c->R, mk_v3_neg(pl.normal)), hint);
-        mk_vec3 w = mk_v3_add(mk_mat3_mul_v3(c->R, b->vertices[v]), c->t);
-        offer(c, &c->face_a, mk_v3_dot(pl.normal, w) - pl.offset, i, -1, pl.normal);
-    }
+    for (i = 0; i < c->a->face_count && !c->stopped; ++i) face_of_a(c, i, &hint);
+}
+
+/* Separation along B's face f (normal m in A's frame): the deepest vertex
+ * of A under it, searched from *hint, which is then that vertex. */
+static void face_of_b(sat_ctx *c, int f, int *hint, mk_vec3 *m)
+{
+    mk_plane pl = c->b->planes[f];
+    int u;
+    *m = mk_mat3_mul_v3(c->R, pl.normal);
+    u = *hint = mk_hull_support_index(c->a, mk_v3_neg(*m), *hint);
+    offer(c, &c->face_b, mk_v3_dot(*m, mk_v3_sub(c->a->vertices[u], c->t)) - pl.offset, -1, f, mk_v3_neg(*m));
 }
 
 /* Separation of the cores along the unit axis n, from the support points:
@@ -217,26 +234,33 @@ static int walk(sat_ctx *c, const sat_edge *eb, int v)
     return 1;
 }
 
+/* B's half-edge j as a sat_edge in A's frame; n1 is its own face's normal
+ * there (the caller has it). */
+static void edge_of_b(const sat_ctx *c, int j, mk_vec3 n1, sat_edge *eb)
+{
+    prepare_edge(c->b, j, eb);
+    eb->p = mk_v3_add(mk_mat3_mul_v3(c->R, eb->p), c->t);
+    eb->e = mk_mat3_mul_v3(c->R, eb->e);
+    eb->n1 = n1;
+    eb->n2 = mk_mat3_mul_v3(c->R, eb->n2);
+}
+
 /* B's faces, then B's edges face by face: the support of A along -n_f that
  * measures the separation along B's face f is also where the Gauss-map walk
  * of each of f's edges starts (their arcs begin at -n_f). */
 static void faces_and_edges_of_b(sat_ctx *c)
 {
-    const mk_hull *a = c->a, *b = c->b;
+    const mk_hull *b = c->b;
     int f, hint = -1;
     for (f = 0; f < b->face_count && !c->stopped; ++f) {
-        mk_plane pl = b->planes[f];
-        mk_vec3 m = mk_mat3_mul_v3(c->R, pl.normal);
-        int u = hint = mk_hull_support_index(a, mk_v3_neg(m), hint), j0 = b->face_edge[f], j = j0;
-        offer(c, &c->face_b, mk_v3_dot(m, mk_v3_sub(a->vertices[u], c->t)) - pl.offset, -1, f, mk_v3_neg(m));
+        mk_vec3 m;
+        int j0 = b->face_edge[f], j = j0, u;
+        face_of_b(c, f, &hint, &m);
+        u = hint;
         do {
             if (b->edges[j].twin > j && !c->stopped) { /* each edge once, from the face of its lower half-edge */
                 sat_edge eb;
-                prepare_edge(b, j, &eb);
-                eb.p = mk_v3_add(mk_mat3_mul_v3(c->R, eb.p), c->t);
-                eb.e = mk_mat3_mul_v3(c->R, eb.e);
-                eb.n1 = m;
-                eb.n2 = mk_mat3_mul_v3(c->R, eb.n2);
+                edge_of_b(c, j, m, &eb);
                 if (!walk(c, &eb, u)) scan(c, &eb);
             }
             j = b->edges[j].next;
@@ -286,12 +310,45 @@ static void finish(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *o
     out->normal = pick->n;
 }
 
+/* The separation along the axis opt->first names (a face of A or of B,
+ * or an edge pair); 1 if it ends the search (offered to its kind). */
+static int first_axis(sat_ctx *c, const mk_sat_options *opt)
+{
+    const mk_hull *a = c->a, *b = c->b;
+    int hint = -1;
+    mk_vec3 m;
+    if (opt->first == MK_SAT_FACE_A && opt->first_a >= 0 && opt->first_a < a->face_count) {
+        face_of_a(c, opt->first_a, &hint);
+    } else if (opt->first == MK_SAT_FACE_B && opt->first_b >= 0 && opt->first_b < b->face_count) {
+        face_of_b(c, opt->first_b, &hint, &m);
+    } else if (opt->first == MK_SAT_EDGES && opt->first_a >= 0 && opt->first_a < a->edge_count && opt->first_b >= 0 &&
+               opt->first_b < b->edge_count) {
+        sat_edge ea, eb;
+        mk_real sep;
+        prepare_edge(a, opt->first_a, &ea);
+        edge_of_b(c, opt->first_b, mk_mat3_mul_v3(c->R, b->planes[b->edges[opt->first_b].face].normal), &eb);
+        /* Measured by the support points, as any axis may be. */
+        if (edge_axis(ea.p, ea.e, ea.n1, ea.n2, eb.p, eb.e, &m, &sep)) offer(c, &c->edges, support_separation(c, m), ea.index, eb.index, m);
+    }
+    if (!c->stopped) {
+        /* Not apart along it: forget it, so the full search answers exactly as without the hint. */
+        axis_none(&c->face_a);
+        axis_none(&c->face_b);
+        axis_none(&c->edges);
+    }
+    return c->stopped;
+}
+
 void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
 {
     sat_ctx c;
     ctx_init(&c, R, t, opt);
     c.a = a;
     c.b = b;
+    if (opt->first != MK_SAT_NONE && first_axis(&c, opt)) {
+        finish(&c, opt, out);
+        return;
+    }
     faces_of_a(&c);
     faces_and_edges_of_b(&c);
     finish(&c, opt, out);
@@ -347,6 +404,38 @@ MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_
  * index of the best axis of each kind is kept while testing; its normal is
  * built once at the end. The early stop looks at whole groups (A's faces,
  * B's faces, the edges): the answer is then the best of the groups tested. */
+/* The separation along opt->first (named as mk_sat_result names box axes:
+ * a face index, or the box view's half-edges), kept only if it ends the
+ * search. */
+MK_ALWAYS_INLINE void box_first_axis(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, mk_real *db,
+                                     const mk_sat_options *opt, sat_ctx *c)
+{
+    int i = opt->first_a, j = opt->first_b;
+    if (opt->first == MK_SAT_FACE_A && i >= 0 && i < 6) {
+        i /= 2;
+        c->face_a.sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
+        c->face_a.a = i;
+    } else if (opt->first == MK_SAT_FACE_B && j >= 0 && j < 6) {
+        j /= 2;
+        db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
+        c->face_b.sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
+        c->face_b.b = j;
+    } else if (opt->first == MK_SAT_EDGES && i >= 0 && i < 24 && j >= 0 && j < 24) {
+        box_edge_axis(r, ar, a, b, d, mk_box_hull_edge_id(i) / 4, mk_box_hull_edge_id(j) / 4, &c->edges);
+    }
+    c->stopped = c->face_a.sep > c->stop || c->face_b.sep > c->stop || c->edges.sep > c->stop;
+    if (!c->stopped) { /* not apart along it: the full search answers exactly as without the hint */
+        c->face_a.sep = c->face_b.sep = c->edges.sep = -MK_REAL_MAX;
+        c->face_a.a = 0;
+        c->face_b.b = c->edges.a = c->edges.b = -1;
+    }
+}
+
+/* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
+ * frame), so every axis below is a few multiply-adds on scalars. Only the
+ * index of the best axis of each kind is kept while testing; its normal is
+ * built once at the end. The early stop looks at whole groups (A's faces,
+ * B's faces, the edges): the answer is then the best of the groups tested. */
 void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
 {
     sat_ctx c;
@@ -362,22 +451,23 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
     d[0] = t.x, d[1] = t.y, d[2] = t.z;
     c.stop = opt->stop_above;
     c.stopped = 0;
-    c.edges.sep = -MK_REAL_MAX;
-    c.edges.a = c.edges.b = -1;
-    /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
-    c.face_a.sep = -MK_REAL_MAX;
+    c.face_a.sep = c.face_b.sep = c.edges.sep = -MK_REAL_MAX;
     c.face_a.a = 0;
-    for (i = 0; i < 3; ++i) {
-        mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
-        if (sep > c.face_a.sep) c.face_a.sep = sep, c.face_a.a = i;
-    }
-    /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along +R_j. */
-    c.face_b.sep = -MK_REAL_MAX;
     c.face_b.a = c.face_b.b = -1;
     c.face_b.n = mk_v3_zero();
-    if (c.face_a.sep > c.stop) {
-        c.stopped = 1;
-    } else {
+    c.edges.a = c.edges.b = -1;
+    /* Last frame's separating axis first: a pair that stays apart ends here. */
+    if (opt->first != MK_SAT_NONE) box_first_axis(r, ar, a, b, d, db, opt, &c);
+    /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
+    if (!c.stopped) {
+        for (i = 0; i < 3; ++i) {
+            mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
+            if (sep > c.face_a.sep) c.face_a.sep = sep, c.face_a.a = i;
+        }
+        c.stopped = c.face_a.sep > c.stop;
+    }
+    /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along +R_j. */
+    if (!c.stopped) {
         for (j = 0; j < 3; ++j) {
             mk_real sep;
             db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
@@ -399,6 +489,17 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
         box_edge_axis(r, ar, a, b, d, 2, 1, &c.edges);
         box_edge_axis(r, ar, a, b, d, 2, 2, &c.edges);
         if (c.edges.sep > c.stop) c.stopped = 1;
+    }
+    if (c.face_a.sep > c.stop) {
+        /* Apart along a face of A, the common early stop: that axis alone. */
+        i = c.face_a.a;
+        out->kind = MK_SAT_FACE_A;
+        out->a = 2 * i + (d[i] >= 0);
+        out->b = -1;
+        out->best = out->separation = c.face_a.sep;
+        out->normal = mk_v3(i == 0 ? (d[0] >= 0 ? 1 : -1) : 0, i == 1 ? (d[1] >= 0 ? 1 : -1) : 0, i == 2 ? (d[2] >= 0 ? 1 : -1) : 0);
+        out->complete = 0;
+        return;
     }
     /* The normals and feature indices of the kinds' winners. */
     i = c.face_a.a;

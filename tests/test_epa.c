@@ -2,13 +2,16 @@
  * configurations, smooth shapes at the iteration cap, never NaN. */
 #include "epa.h"
 #include "minko/distance.h"
+#include "support/cases.h"
 #include "support/mk_test.h"
 
 #if defined(MK_SINGLE)
 #  define TOL 2e-5
+#  define TOL_REL 1e-4
 #  define HAIR 1e-4
 #else
 #  define TOL 1e-12
+#  define TOL_REL 1e-10
 #  define HAIR 1e-9
 #endif
 
@@ -155,6 +158,35 @@ START_TEST(depth_is_minimal_translation)
 }
 END_TEST
 
+/* Polytope pairs end on a converged face, never on a defect: EPA's
+ * silhouette must come out as one closed loop in walk order (expand), and
+ * the loops specialised on hull-hull, hull-box and box-hull pairs must
+ * answer like the generic one. The separation along EPA's normal is then the
+ * exact depth (the oracle's), in either order of the pair. */
+START_TEST(polytopes_converge_exactly)
+{
+    static const mk_family fams[] = {MK_FAM_HULL_8, MK_FAM_HULL_32, MK_FAM_HULL_BOX};
+    mk_case_set set;
+    int f, i, swap;
+    for (f = 0; f < 3; ++f) {
+        memset(&set, 0, sizeof set);
+        ck_assert_int_eq(mk_cases_add_family(&set, fams[f], 0, 20, 7 + (uint64_t)f), 0);
+        for (i = 0; i < set.count; ++i)
+            for (swap = 0; swap < 2; ++swap) {
+                const mk_case *c = &set.cases[i];
+                mk_epa_result e;
+                mk_real tol = (mk_real)(TOL_REL * c->size);
+                if (swap) ck_assert_int_eq(epa_of(&c->b, c->xb, &c->a, c->xa, &e), 0);
+                else ck_assert_int_eq(epa_of(&c->a, c->xa, &c->b, c->xb, &e), 0);
+                check_finite(&e);
+                ck_assert_int_eq(e.state, MK_SOLVE_CONVERGED);
+                MK_ASSERT_NEAR(e.separation - c->a.radius - c->b.radius, c->distance, tol);
+            }
+        mk_case_set_free(&set);
+    }
+}
+END_TEST
+
 static Suite *epa_suite(void)
 {
     Suite *s = suite_create("epa");
@@ -164,6 +196,7 @@ static Suite *epa_suite(void)
     tcase_add_test(tc, flat_cso_falls_back);
     tcase_add_test(tc, smooth_cores_deep);
     tcase_add_test(tc, depth_is_minimal_translation);
+    tcase_add_test(tc, polytopes_converge_exactly);
     suite_add_tcase(s, tc);
     return s;
 }

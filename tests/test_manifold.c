@@ -1010,6 +1010,57 @@ START_TEST(rounded_polytopes_exact)
 }
 END_TEST
 
+/* Pairs that stay apart keep last frame's separating axis in the cache and
+ * test it first (one axis instead of a whole SAT); when they meet, the
+ * first contact frame is a cold one, so exactly the cold answer. Boxes and
+ * hulls approaching along random directions with random spins. */
+START_TEST(apart_then_contact_is_cold)
+{
+    mk_rng r = {47};
+    mk_vec3 pts[20];
+    mk_hull *h;
+    mk_shape shapes[3];
+    int i, k, f, met = 0;
+    for (k = 0; k < 20; ++k) pts[k] = mk_v3_mul(mk_rng_dir(&r), mk_v3(0.6, 0.4, 0.5));
+    h = make_hull(pts, 20);
+    mk_shape_box(mk_v3(0.5, 0.3, 0.4), 0, &shapes[0]);
+    mk_shape_hull(h, 0, &shapes[1]);
+    mk_shape_box(mk_v3(0.2, 0.6, 0.3), (mk_real)0.02, &shapes[2]);
+    for (i = 0; i < 120; ++i) {
+        const mk_shape *a = &shapes[i % 3], *b = &shapes[(i / 3) % 3];
+        mk_vec3 dir = mk_rng_dir(&r), spin = mk_rng_dir(&r);
+        mk_quat qa = mk_rng_quat(&r), qb = mk_rng_quat(&r);
+        mk_manifold_cache cache;
+        int was_apart = 0;
+        memset(&cache, 0, sizeof cache);
+        for (f = 0; f < 40; ++f) {
+            mk_real dist = (mk_real)(1.6 - 0.04 * f);
+            mk_transform xb = mk_transform_make(mk_v3_scale(dir, dist), mk_quat_mul(mk_quat_from_axis_angle(spin, (mk_real)(0.01 * f)), qb));
+            mk_transform xa = mk_transform_make(mk_v3_zero(), qa);
+            mk_manifold warm, cold;
+            int j;
+            MK_ASSERT_STATUS(mk_collide(a, xa, b, xb, 0, &cache, &warm), MK_OK);
+            cold = collide(a, xa, b, xb, 0);
+            if (warm.count == 0) {
+                ck_assert_int_eq(cold.count, 0);
+                was_apart = 1;
+                continue;
+            }
+            ck_assert_msg(was_apart, "pair %d met at once", i);
+            ck_assert_int_eq(warm.count, cold.count);
+            for (j = 0; j < cold.count; ++j) {
+                ck_assert_uint_eq(warm.points[j].features, cold.points[j].features);
+                ck_assert(warm.points[j].depth == cold.points[j].depth);
+            }
+            ++met;
+            break;
+        }
+    }
+    ck_assert_int_gt(met, 100);
+    mk_hull_destroy(h);
+}
+END_TEST
+
 /* A rounded cylinder on a rounded hull cube (the GJK/EPA pairs), cores apart
  * and cores overlapping: standing, its rim points all at the exact depth;
  * tilted by 0.3 rad, its lowest rim point at the analytic depth. */
@@ -1155,6 +1206,7 @@ static Suite *manifold_suite(void)
     tcase_add_test(tc, hull_large_face_on_plane);
     tcase_add_test(tc, hull_random_exact_depth);
     tcase_add_test(tc, rounded_polytopes_exact);
+    tcase_add_test(tc, apart_then_contact_is_cold);
     tcase_add_test(tc, cylinder_on_rounded_hull);
     suite_add_tcase(s, tc);
     tc = tcase_create("feature_ids");

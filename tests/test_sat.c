@@ -554,6 +554,74 @@ START_TEST(hysteresis)
 }
 END_TEST
 
+/* The first-axis hint (mk_sat_options.first): apart pairs, hinted with
+ * the axis an early-stopping run reported, stop on it at once with the
+ * same answer; penetrating pairs, whatever the hint, get the full answer.
+ * Hulls through mk_sat, boxes through mk_sat_box_box. */
+static void hinted(const mk_hull *a, const mk_hull *b, const mk_vec3 *boxes, const mk_mat3 *R, mk_vec3 t, mk_sat_result *out,
+                   const mk_sat_options *o)
+{
+    if (boxes) mk_sat_box_box(boxes[0], boxes[1], R, t, o, out);
+    else mk_sat(a, b, R, t, o, out);
+}
+
+START_TEST(first_axis_hint)
+{
+    mk_rng r = {26};
+    int i, stops = 0, full = 0;
+    for (i = 0; i < 600; ++i) {
+        int box = i % 2;
+        mk_vec3 hx[2];
+        mk_box_hull A, B;
+        mk_hull *ha = NULL, *hb = NULL;
+        const mk_hull *a, *b;
+        mk_mat3 R = mk_mat3_from_quat(mk_rng_quat(&r));
+        mk_vec3 t = mk_v3_scale(mk_rng_dir(&r), (mk_real)mk_rng_range(&r, 0, 3));
+        mk_sat_options o = mk_sat_defaults();
+        mk_sat_result base, quick, hint;
+        if (box) {
+            hx[0] = mk_rng_v3(&r, 0.2, 1);
+            hx[1] = mk_rng_v3(&r, 0.2, 1);
+            mk_box_hull_init(&A, hx[0]);
+            mk_box_hull_init(&B, hx[1]);
+            a = &A.hull;
+            b = &B.hull;
+        } else {
+            a = ha = ellipsoid_hull(&r, 16, mk_rng_v3(&r, 0.3, 1));
+            b = hb = ellipsoid_hull(&r, 16, mk_rng_v3(&r, 0.3, 1));
+        }
+        hinted(a, b, box ? hx : NULL, &R, t, &base, &o);
+        o.stop_above = 0;
+        hinted(a, b, box ? hx : NULL, &R, t, &quick, &o);
+        if (base.best > 0) {
+            o.first = quick.kind;
+            o.first_a = quick.a;
+            o.first_b = quick.b;
+            hinted(a, b, box ? hx : NULL, &R, t, &hint, &o);
+            REQUIRE(!hint.complete && hint.kind == quick.kind && hint.a == quick.a && hint.b == quick.b, "case %d: hint not taken", i);
+            REQUIRE(fabsl((ld)hint.best - (ld)quick.separation) <= val_tol(4) && hint.best > 0, "case %d: hinted separation %.17g, %.17g", i,
+                    (double)hint.best, (double)quick.separation);
+            REQUIRE(brute_along(a, b, &R, t, hint.normal) > 0, "case %d: the hinted axis does not separate", i);
+            ++stops;
+        } else {
+            /* Penetrating: a hint (any axis of any kind) changes nothing. */
+            o.stop_above = MK_REAL_MAX;
+            o.first = (mk_sat_kind)(1 + i % 3);
+            o.first_a = o.first == MK_SAT_FACE_B ? -1 : o.first == MK_SAT_EDGES ? (box ? 3 : 0) : 1;
+            o.first_b = o.first == MK_SAT_FACE_A ? -1 : o.first == MK_SAT_EDGES ? (box ? 5 : 1) : 0;
+            hinted(a, b, box ? hx : NULL, &R, t, &hint, &o);
+            REQUIRE(hint.complete && hint.best == base.best && hint.kind == base.kind && hint.a == base.a && hint.b == base.b,
+                    "case %d: a hint changed a penetrating answer", i);
+            ++full;
+        }
+        if (ha) mk_hull_destroy(ha);
+        if (hb) mk_hull_destroy(hb);
+    }
+    ck_assert_int_gt(stops, 100);
+    ck_assert_int_gt(full, 100);
+}
+END_TEST
+
 static Suite *sat_suite(void)
 {
     Suite *s = suite_create("sat");
@@ -567,6 +635,7 @@ static Suite *sat_suite(void)
     tcase_add_test(tc, libccd_25_stacked_cubes);
     tcase_add_test(tc, early_stop);
     tcase_add_test(tc, hysteresis);
+    tcase_add_test(tc, first_axis_hint);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -30,10 +30,24 @@ Material material_of(const btCollisionObject *o0, const btCollisionObject *o1)
     return m;
 }
 
+// The friction directions btManifoldResult::addContactPoint gives a normal,
+// computed once for the points that share it (all of a Minko manifold's).
+struct Tangents {
+    btVector3 normal{0, 0, 0}, t1{0, 0, 0}, t2{0, 0, 0};
+    bool set = false;
+    void of(const btVector3 &n)
+    {
+        if (set && n == normal) return;
+        normal = n;
+        btPlaneSpace1(n, t1, t2);
+        set = true;
+    }
+};
+
 // The point btManifoldResult::addContactPoint would build, with the feature
 // keys in the part ids (body 0 / body 1 of the manifold).
 btManifoldPoint make_point(const btTransform &t0, const btTransform &t1, bool swapped, int index0, int index1,
-                           const Material &mat, const PairContact &c)
+                           const Material &mat, Tangents *tangents, const PairContact &c)
 {
     const btVector3 point_a = c.point_on_b + c.normal_on_b * c.distance;
     const btTransform &ta = swapped ? t1 : t0, &tb = swapped ? t0 : t1;
@@ -47,7 +61,9 @@ btManifoldPoint make_point(const btTransform &t0, const btTransform &t1, bool sw
     p.m_combinedContactDamping1 = mat.damping;
     p.m_combinedContactStiffness1 = mat.stiffness;
     p.m_contactPointFlags |= mat.flags;
-    btPlaneSpace1(p.m_normalWorldOnB, p.m_lateralFrictionDir1, p.m_lateralFrictionDir2);
+    tangents->of(c.normal_on_b);
+    p.m_lateralFrictionDir1 = tangents->t1;
+    p.m_lateralFrictionDir2 = tangents->t2;
     p.m_partId0 = swapped ? c.feature_b : c.feature_a;
     p.m_partId1 = swapped ? c.feature_a : c.feature_b;
     p.m_index0 = swapped ? index1 : index0;
@@ -79,6 +95,7 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
     const bool was_empty = m->getNumContacts() == 0;
     const btScalar threshold = m->getContactBreakingThreshold();
     const Material mat = material_of(o0, o1);
+    Tangents tangents;
 
     btManifoldPoint fresh[MANIFOLD_CACHE_SIZE];
     int slot_of[MANIFOLD_CACHE_SIZE];  // cached slot matched by fresh[i], or -1
@@ -87,7 +104,7 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
     for (int i = 0; i < count; i++) {
         if (points[i].distance > threshold) continue;
         fresh[n] = make_point(o0->getWorldTransform(), o1->getWorldTransform(), swapped, w0->m_index, w1->m_index,
-                              mat, points[i]);
+                              mat, &tangents, points[i]);
         slot_of[n] = -1;
         for (int s = 0; s < m->getNumContacts(); s++) {
             if (!slot_used[s] && same_key(m->getContactPoint(s), fresh[n])) {

@@ -152,7 +152,9 @@ private:
 // A, point on B, negative distance = penetration, points up to the manifold's
 // contact breaking threshold apart kept as speculative contacts) and matches
 // points to the cached ones by Minko feature ID, so m_appliedImpulse follows
-// its contact (contact_writer.h). Hull shapes are converted once per shape and
+// its contact (a point whose features changed in place is matched by
+// position, as Bullet matches; points not reported stay until Bullet's
+// refreshContactPoints drops them: contact_writer.h). Hull shapes are converted once per shape and
 // cached here, keyed by the shape (a btConvexHullShape must not change its
 // points while this configuration uses it, as with Bullet's polyhedral
 // features). m_customCollisionAlgorithmMaxElementSize is raised to fit the

@@ -34,15 +34,18 @@
  * used during about the last table's worth of calls are recycled before the
  * table grows.
  *
- * The cache keeps faces, not edges. Its hysteresis keeps whichever kind of
- * axis won last, so two boxes that once came out edge on edge (turned 3e-3
- * rad, a face nearly as good) stayed on one point for good: in the 210-box
- * pyramid 358 of about 395 box pairs ended with one point (ODE's dBoxBox:
- * about 40), and the pyramid shook itself apart (kinetic energy 10.7 J at
- * the end against ODE's 0.07). ODE's dBoxBox and Box2D favour faces; here a
- * lone edge-on-edge point of two polytopes sends the pair's next query in
- * cold, which takes the face again as soon as it is the minimum (then 359
- * pairs with four points, 0.14 J; ode_scenes --scene pyramid).
+ * Faces over edges is mk_collide's own rule on warm calls (manifold.h: an
+ * edge pair must beat the face by the hysteresis band), as ODE's dBoxBox
+ * and Box2D favour faces. Before it, the cache kept whichever kind of axis
+ * won last, so two boxes that once came out edge on edge (turned 3e-3 rad,
+ * a face nearly as good) stayed on one point for good: in the 210-box
+ * pyramid 358 of about 395 box pairs ended with one point and the pyramid
+ * shook itself apart (kinetic energy 10.7 J at the end against ODE's 0.07),
+ * which this adapter worked around by querying cold after a lone
+ * edge-on-edge point. With the rule in mk_collide that workaround made no
+ * difference on the tower and hulls scenes and the pyramid ended calmer
+ * without it (ode_scenes --scene pyramid: 0.17 J against 0.28 J), so it
+ * is gone.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -471,16 +474,6 @@ static int choose_points(const mk_manifold *m, int maxc, int *order)
     return n;
 }
 
-static int is_polytope(const mk_shape *s) { return s->type == MK_SHAPE_BOX || s->type == MK_SHAPE_HULL; }
-
-/* m is a single point where an edge of polytope a meets an edge of polytope b. */
-static int edge_on_edge(const mk_shape *a, const mk_shape *b, const mk_manifold *m)
-{
-    uint32_t f = m->points[0].features;
-    return m->count == 1 && is_polytope(a) && is_polytope(b) && MK_FEATURE_TYPE(MK_FEATURE_PAIR_A(f)) == MK_FEATURE_EDGE &&
-           MK_FEATURE_TYPE(MK_FEATURE_PAIR_B(f)) == MK_FEATURE_EDGE;
-}
-
 /* Minko for a supported pair; -1 when Minko could not answer (the caller
  * decides: fall back to dCollide, or report nothing). */
 static int minko_collide(dGeomID o1, dGeomID o2, int flags, dContactGeom *contact, int skip)
@@ -506,7 +499,6 @@ static int minko_collide(dGeomID o1, dGeomID o2, int flags, dContactGeom *contac
         return -1;
     }
     mk_ode_stats_.collide_calls++;
-    if (cache && edge_on_edge(&a, &b, &m)) memset(cache, 0, sizeof *cache); /* faces are kept, edges not: see the top */
     if ((unsigned int)flags & ODE_CONTACTS_UNIMPORTANT) maxc = 1;
     n = choose_points(&m, maxc < MK_MANIFOLD_MAX_POINTS ? maxc : MK_MANIFOLD_MAX_POINTS, order);
     for (i = 0; i < n; i++) {

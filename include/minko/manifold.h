@@ -39,9 +39,13 @@
  * cones, spheres and capsules against hulls), whose support faces are then
  * clipped. A build without SAT (MK_WITHOUT) takes GJK/EPA for box and hull
  * pairs too; one without GJK or EPA returns MK_ERR_UNSUPPORTED for the pairs
- * that need them. Complexity per call: O(1) for the closed forms and for two
- * boxes (15 axes, a 4-by-4 face clip: about 3.3k instructions per call on
- * demos/bench_contacts' resting and random boxes, 40 % of it SAT); for hulls SAT's O(F_A S_B + F_B S_A +
+ * that need them. Box and hull pairs whose bounding balls are farther apart
+ * than the margin return before anything else. Complexity per call: O(1)
+ * for the closed forms and for two boxes (15 axes, a 4-by-4 face clip in
+ * the reference box's frame; on demos/bench_contacts' cases about 3.0k
+ * instructions cold and 4.0k warm for tilted stacked boxes, 2.9k / 3.1k
+ * for random overlaps, 1.1k for separated boxes whose bounding boxes
+ * overlap; a quarter of it SAT); for hulls SAT's O(F_A S_B + F_B S_A +
  * E_A E_B) (src/sat.h) plus O(n + m) clipping of faces with n and m (at most
  * 32) vertices; GJK/EPA pairs are bounded by their iteration caps.
  *
@@ -112,7 +116,8 @@ typedef struct mk_manifold_cache {
     mk_gjk_cache gjk;   /* GJK warm start of pairs without a closed form */
     int reference;      /* internal: 1 / 2 when the last manifold was clipped against a face of A / B */
     mk_feature face;    /* internal: that face */
-    int axis;           /* internal: kind of the last SAT axis of a box or hull pair, 0 = none */
+    int axis;           /* internal: kind of the last SAT axis of a box or hull pair, 0 = none; for a pair
+                         * that was apart, its separating axis (with reference and face) */
 } mk_manifold_cache;
 
 /* The contact manifold of shapes a (pose xa) and b (pose xb). `margin` >= 0:
