@@ -438,6 +438,46 @@ MK_ALWAYS_INLINE void box_first_axis(mk_real r[3][3], mk_real ar[3][3], const mk
     }
 }
 
+/* A face axis named by opt->first, straight from R before anything is set
+ * up: a pair that stays apart along last frame's face axis (the common
+ * case of boxes whose bounding boxes overlap) costs this and nothing else.
+ * Returns 1 with *out filled as the full search would stop there. */
+static int box_hint_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    mk_real sep, s;
+    mk_vec3 n;
+    int i = opt->first_a, j = opt->first_b;
+    if (opt->first == MK_SAT_FACE_A && i >= 0 && i < 6) {
+        /* Row i of R: B's axes' components along A's axis i. */
+        mk_vec3 row = i < 2 ? mk_v3(R->c0.x, R->c1.x, R->c2.x) : i < 4 ? mk_v3(R->c0.y, R->c1.y, R->c2.y) : mk_v3(R->c0.z, R->c1.z, R->c2.z);
+        mk_real d = i < 2 ? t.x : i < 4 ? t.y : t.z, h = i < 2 ? ha.x : i < 4 ? ha.y : ha.z;
+        sep = mk_fabs_(d) - h - (mk_fabs_(row.x) * hb.x + mk_fabs_(row.y) * hb.y + mk_fabs_(row.z) * hb.z);
+        if (!(sep > opt->stop_above)) return 0;
+        s = d >= 0 ? 1 : -1;
+        i /= 2;
+        out->kind = MK_SAT_FACE_A;
+        out->a = 2 * i + (d >= 0);
+        out->b = -1;
+        out->normal = mk_v3(i == 0 ? s : 0, i == 1 ? s : 0, i == 2 ? s : 0);
+    } else if (opt->first == MK_SAT_FACE_B && j >= 0 && j < 6) {
+        mk_vec3 col = j < 2 ? R->c0 : j < 4 ? R->c1 : R->c2;
+        mk_real d = mk_v3_dot(col, t), h = j < 2 ? hb.x : j < 4 ? hb.y : hb.z;
+        sep = mk_fabs_(d) - h - (mk_fabs_(col.x) * ha.x + mk_fabs_(col.y) * ha.y + mk_fabs_(col.z) * ha.z);
+        if (!(sep > opt->stop_above)) return 0;
+        s = d >= 0 ? 1 : -1;
+        n = mk_v3_scale(col, s);
+        out->kind = MK_SAT_FACE_B;
+        out->a = -1;
+        out->b = 2 * (j / 2) + (d < 0);
+        out->normal = n;
+    } else {
+        return 0;
+    }
+    out->best = out->separation = sep;
+    out->complete = 0;
+    return 1;
+}
+
 /* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
  * frame), so every axis below is a few multiply-adds on scalars. Only the
  * index of the best axis of each kind is kept while testing; its normal is
@@ -448,6 +488,7 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
     sat_ctx c;
     mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3], L[3], Lb[3], l;
     int i, j, k;
+    if (opt->first != MK_SAT_NONE && box_hint_apart(ha, hb, R, t, opt, out)) return;
     r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
     r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
     r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
