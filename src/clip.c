@@ -596,15 +596,49 @@ static int clip_box_side(int face, int q, mk_feature finc_face, mk_real sign, in
     return m;
 }
 
-void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb)
+/* Appends the clipped vertices v within the margin as candidates, in A's
+ * frame; with `reduce`, only the four mk_mf_pick4 keeps, chosen in the
+ * reference face's own coordinates (exact there), so the others are never
+ * moved to A's frame. */
+static void emit_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce, const box_vert *v,
+                       int cnt)
+{
+    mk_vec3 hv = (ref_is_a ? p->a : p->b)->u.half_extents;
+    mk_real x[MK_MF_MAX], y[MK_MF_MAX], w[MK_MF_MAX], depth[MK_MF_MAX], sgn = face & 1 ? 1 : -1;
+    mk_real h = face < 2 ? hv.x : face < 4 ? hv.y : hv.z;
+    int k = face / 2, iu = (k + 1) % 3, iv = (k + 2) % 3, idx[MK_MF_MAX], pick[4], n = 0, i;
+    for (i = 0; i < cnt; ++i) {
+        mk_real wi = sgn * v[i].c[k] - h; /* height over the reference face */
+        if (!(ra + rb - wi >= -m->margin)) continue;
+        x[n] = v[i].c[iu];
+        y[n] = v[i].c[iv];
+        w[n] = wi;
+        depth[n] = ra + rb - wi;
+        idx[n++] = i;
+    }
+    if (reduce && n > MK_MANIFOLD_MAX_POINTS) {
+        int kept = mk_mf_pick4(n, x, y, depth, pick);
+        mk_real wk[4];
+        for (i = 0; i < kept; ++i) wk[i] = w[pick[i]], pick[i] = idx[pick[i]];
+        for (i = 0; i < kept; ++i) w[i] = wk[i], idx[i] = pick[i];
+        n = kept;
+    }
+    for (i = 0; i < n; ++i) {
+        const box_vert *c = &v[idx[i]];
+        mk_vec3 q = mk_v3(c->c[0], c->c[1], c->c[2]);
+        if (ref_is_a) mk_mf_add(m, mk_v3_mad(q, ra - w[i], m->normal), ra + rb - w[i], c->fref, c->finc);
+        else mk_mf_add(m, mk_v3_mad(mk_v3_add(mk_mat3_mul_v3(p->r, q), p->t), ra, m->normal), ra + rb - w[i], c->finc, c->fref);
+    }
+}
+
+void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce)
 {
     const mk_shape *ref = ref_is_a ? p->a : p->b, *inc = ref_is_a ? p->b : p->a;
     mk_vec3 h = ref->u.half_extents, g = inc->u.half_extents, n = m->normal, d, col[3], tri, c0, cu, cv;
     mk_real hh[3], gg[3], dd[3];
     box_vert buf[2][MK_MF_MAX];
-    int k = face / 2, fi, ia, iu, iv, i, q, cnt = 4, cur = 0;
+    int fi, ia, iu, iv, i, q, cnt = 4, cur = 0;
     mk_real slop = m->cores_apart && ra + rb > 0 ? 0 : m->slop;
-    mk_real sgn = face & 1 ? 1 : -1;
     mk_feature finc_face;
     /* The incident box in the reference frame: x_ref = col * x_inc + tri,
      * and the direction whose support face is incident (as mk_mf_clip's
@@ -648,16 +682,7 @@ void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_rea
                               buf[cur ^ 1]);
         if (r >= 0) cnt = r, cur ^= 1;
     }
-    for (i = 0; i < cnt; ++i) {
-        const box_vert *x = &buf[cur][i];
-        mk_vec3 v = mk_v3(x->c[0], x->c[1], x->c[2]);
-        mk_real w = sgn * x->c[k] - hh[k]; /* height over the reference face */
-        if (ref_is_a) {
-            mk_mf_add(m, mk_v3_mad(v, ra - w, n), ra + rb - w, x->fref, x->finc);
-        } else if (ra + rb - w >= -m->margin) {
-            mk_mf_add(m, mk_v3_mad(mk_v3_add(mk_mat3_mul_v3(p->r, v), p->t), ra, n), ra + rb - w, x->finc, x->fref);
-        }
-    }
+    emit_boxes(m, p, ref_is_a, face, ra, rb, reduce, buf[cur], cnt);
 }
 
 /* ---- manifold from closest points ------------------------------------------ */
@@ -774,50 +799,68 @@ void mk_mf_from_hit(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk_hit
  * not change between frames (Box3D uses the same idea). */
 #define REDUCE_BIAS MK_REAL(0.95)
 
-/* The signed area of triangle (a, b, p) seen along n, doubled, is
- * (b - a) x (p - a) . n = (n x (b - a)) . (p - a): one cross product per
- * side of the patch, then one dot product per candidate. */
-static mk_vec3 side(mk_vec3 n, mk_vec3 a, mk_vec3 b) { return mk_v3_cross(n, mk_v3_sub(b, a)); }
-static mk_real area(mk_vec3 side_ab, mk_vec3 a, mk_vec3 p) { return mk_v3_dot(side_ab, mk_v3_sub(p, a)); }
-
-void mk_mf_reduce(mk_mf *m)
+/* Twice the signed area of triangle (a, b, p) in the contact plane. */
+static mk_real area(mk_real ax, mk_real ay, mk_real bx, mk_real by, mk_real px, mk_real py)
 {
-    mk_vec3 n = m->normal, p0, p1, p2, s01, s12, s20;
-    mk_real extent = 0, best, sign;
-    int i, k[4] = {0, -1, -1, -1}, count;
-    mk_mf_point keep[4];
-    if (m->count <= MK_MANIFOLD_MAX_POINTS) return;
-    for (i = 1; i < m->count; ++i) extent = mk_max(extent, mk_v3_max_abs(mk_v3_sub(m->p[i].pa, m->p[0].pa)));
-    for (i = 1; i < m->count; ++i)
-        if (m->p[i].depth > m->p[k[0]].depth + 64 * MK_REAL_EPSILON * extent) k[0] = i;
-    p0 = m->p[k[0]].pa;
-    for (best = 0, i = 0; i < m->count; ++i) {
-        mk_vec3 d = mk_v3_sub(m->p[i].pa, p0);
-        mk_real s = mk_v3_len2(mk_v3_mad(d, -mk_v3_dot(d, n), n));
+    return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
+}
+
+int mk_mf_pick4(int n, const mk_real *x, const mk_real *y, const mk_real *depth, int k[4])
+{
+    mk_real extent = 0, best, sign, x0, y0, x1, y1, x2, y2;
+    int i, count = 2;
+    k[0] = 0;
+    k[1] = k[2] = k[3] = -1;
+    for (i = 1; i < n; ++i) extent = mk_max(extent, mk_max(mk_fabs_(x[i] - x[0]), mk_fabs_(y[i] - y[0])));
+    for (i = 1; i < n; ++i)
+        if (depth[i] > depth[k[0]] + 64 * MK_REAL_EPSILON * extent) k[0] = i;
+    x0 = x[k[0]], y0 = y[k[0]];
+    for (best = 0, i = 0; i < n; ++i) {
+        mk_real dx = x[i] - x0, dy = y[i] - y0, s = dx * dx + dy * dy;
         if (s * REDUCE_BIAS * REDUCE_BIAS > best) { best = s; k[1] = i; }
     }
     if (k[1] < 0) k[1] = k[0] == 0 ? 1 : 0; /* all candidates coincide */
-    p1 = m->p[k[1]].pa;
-    s01 = side(n, p0, p1);
-    for (best = 0, i = 0; i < m->count; ++i) {
-        mk_real s = mk_fabs_(area(s01, p0, m->p[i].pa));
+    x1 = x[k[1]], y1 = y[k[1]];
+    for (best = 0, i = 0; i < n; ++i) {
+        mk_real s = mk_fabs_(area(x0, y0, x1, y1, x[i], y[i]));
         if (s * REDUCE_BIAS > best) { best = s; k[2] = i; }
     }
-    count = 2;
-    if (k[2] >= 0) {
-        count = 3;
-        p2 = m->p[k[2]].pa;
-        sign = area(s01, p0, p2) > 0 ? 1 : -1;
-        s12 = side(n, p1, p2);
-        s20 = side(n, p2, p0);
-        for (best = 0, i = 0; i < m->count; ++i) {
-            /* How far outside the triangle's sides p lies: the area it adds to the patch. */
-            mk_vec3 p = m->p[i].pa;
-            mk_real s = mk_max(-sign * area(s01, p0, p), mk_max(-sign * area(s12, p1, p), -sign * area(s20, p2, p)));
-            if (s * REDUCE_BIAS > best) { best = s; k[3] = i; }
-        }
-        if (k[3] >= 0) count = 4;
+    if (k[2] < 0) return count;
+    count = 3;
+    x2 = x[k[2]], y2 = y[k[2]];
+    sign = area(x0, y0, x1, y1, x2, y2) > 0 ? 1 : -1;
+    for (best = 0, i = 0; i < n; ++i) {
+        /* How far outside the triangle's sides the point lies: the area it adds to the patch. */
+        mk_real s = mk_max(-sign * area(x0, y0, x1, y1, x[i], y[i]),
+                           mk_max(-sign * area(x1, y1, x2, y2, x[i], y[i]), -sign * area(x2, y2, x0, y0, x[i], y[i])));
+        if (s * REDUCE_BIAS > best) { best = s; k[3] = i; }
     }
+    return k[3] >= 0 ? 4 : count;
+}
+
+/* Coordinates in the contact plane: an orthonormal pair (t1, t2) with
+ * t1 x t2 = n, the axes after n's largest component when n is a coordinate
+ * axis (box faces, planes), so their coordinates are exact. */
+void mk_mf_reduce(mk_mf *m)
+{
+    mk_real x[MK_MF_MAX], y[MK_MF_MAX], depth[MK_MF_MAX], nn[3];
+    mk_vec3 n = m->normal, e = mk_v3_zero(), t1, t2;
+    mk_mf_point keep[MK_MANIFOLD_MAX_POINTS];
+    int k[4], i, count, ax;
+    if (m->count <= MK_MANIFOLD_MAX_POINTS) return;
+    nn[0] = mk_fabs_(n.x), nn[1] = mk_fabs_(n.y), nn[2] = mk_fabs_(n.z);
+    ax = nn[0] >= nn[1] && nn[0] >= nn[2] ? 0 : nn[1] >= nn[2] ? 1 : 2;
+    if (ax == 0) e.y = 1;
+    else if (ax == 1) e.z = 1;
+    else e.x = 1;
+    t1 = mk_v3_normalize(mk_v3_mad(e, -mk_v3_dot(e, n), n));
+    t2 = mk_v3_cross(n, t1);
+    for (i = 0; i < m->count; ++i) {
+        x[i] = mk_v3_dot(t1, m->p[i].pa);
+        y[i] = mk_v3_dot(t2, m->p[i].pa);
+        depth[i] = m->p[i].depth;
+    }
+    count = mk_mf_pick4(m->count, x, y, depth, k);
     for (i = 0; i < count; ++i) keep[i] = m->p[k[i]];
     for (i = 0; i < count; ++i) m->p[i] = keep[i];
     m->count = count;

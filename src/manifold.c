@@ -407,7 +407,7 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     m->normal = sat.normal;
     m->cores_apart = sat.separation > 0;
     if (boxes && sat.kind != MK_SAT_EDGES) {
-        mk_mf_clip_boxes(m, p, sat.kind == MK_SAT_FACE_A, sat.kind == MK_SAT_FACE_A ? sat.a : sat.b, ra, rb);
+        mk_mf_clip_boxes(m, p, sat.kind == MK_SAT_FACE_A, sat.kind == MK_SAT_FACE_A ? sat.a : sat.b, ra, rb, 1);
     } else if (sat.kind == MK_SAT_FACE_A) {
         polytope_face(a, sat.a, &ref);
         mk_support_feature(b, mk_mat3_tmul_v3(p->r, mk_v3_neg(sat.normal)), &inc);

@@ -79,8 +79,10 @@ void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, 
 /* mk_mf_clip of two box cores of pair p (both shapes boxes) with box face
  * `face` of A (ref_is_a) or of B as the reference, against the incident
  * face of the other box along m->normal (set, a SAT face axis): the same
- * candidates and IDs, computed in the reference box's frame. */
-void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb);
+ * candidates and IDs, computed in the reference box's frame. With `reduce`
+ * (m empty on entry) more than four candidates are reduced as mk_mf_reduce
+ * would, in the reference face's coordinates. */
+void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce);
 
 /* The manifold of two cores whose closest points are known: n (unit, A to B)
  * and the core witness points ca on A and cb on B (A's frame), with core
@@ -96,6 +98,11 @@ void mk_mf_from_hit(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk_hit
 /* Keeps at most MK_MANIFOLD_MAX_POINTS: the deepest, then those spanning the
  * largest area. */
 void mk_mf_reduce(mk_mf *m);
+/* The reduction's choice among n > 4 candidates given by their coordinates
+ * (x, y) in the contact plane (any orthonormal pair whose cross product is
+ * the normal) and their depths: the indices kept, deepest first, in k;
+ * returns how many (2 to 4). */
+int mk_mf_pick4(int n, const mk_real *x, const mk_real *y, const mk_real *depth, int k[4]);
 
 /* The feature of s's core that contains the core point p (local frame),
  * with n the outward direction there. */

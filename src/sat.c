@@ -374,16 +374,6 @@ static int box_edge(int axis, const mk_real *s)
     return 4 * axis + (s[lo] > 0) + 2 * (s[hi] > 0);
 }
 
-/* sep / sqrt(l2) > best, without the square root and division: an edge axis
- * seldom wins, so only the winners pay for normalising. Rounding may split a
- * near-tie the other way, which only picks an axis of equal separation. */
-MK_ALWAYS_INLINE int beats(mk_real sep, mk_real l2, mk_real best)
-{
-    mk_real s2 = sep * sep, b2l = best * best * l2;
-    if (sep > 0) return best < 0 || s2 > b2l;
-    return best < 0 && s2 < b2l;
-}
-
 /* Edge pair (e_i of A, R_j of B): axis L = e_i x R_j = (0, -R_i2j, R_i1j) in
  * the cyclic order (i, i1, i2), skipped when the edges are nearly parallel.
  * A's extent along L is |R_i2j| a_i1 + |R_i1j| a_i2; B's is
@@ -399,8 +389,9 @@ MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_
     sep = mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]) -
           mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] -
           mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
-    if (beats(sep, l2, best->sep)) {
-        best->sep = sep / mk_sqrt_(l2);
+    sep /= mk_sqrt_(l2);
+    if (sep > best->sep) {
+        best->sep = sep;
         best->a = i;
         best->b = j;
     }

@@ -3,7 +3,8 @@
  * candidates, in the same order, with the same feature IDs, positions and
  * depths, on random poses, stacked boxes (corners on the side planes, where
  * the slop decides) and rounded boxes apart, with the clip slop of either
- * mk_manifold_mode. */
+ * mk_manifold_mode; and reduced to four in the reference face's own
+ * coordinates against the general mk_mf_reduce. */
 #include <string.h>
 
 #include "gjk.h"
@@ -47,7 +48,7 @@ static void general(const mk_pair *p, int ref_is_a, int face, mk_mf *m)
 }
 
 /* Compares the two clips of one pose and reference; returns the candidate count. */
-static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int apart, mk_real slop, int c)
+static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int apart, mk_real slop, int reduce, int c)
 {
     mk_mf g, b;
     mk_vec3 n;
@@ -65,7 +66,8 @@ static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int
     mf_init(&g, n, margin, apart, slop);
     mf_init(&b, n, margin, apart, slop);
     general(p, ref_is_a, face, &g);
-    mk_mf_clip_boxes(&b, p, ref_is_a, face, p->a->radius, p->b->radius);
+    mk_mf_clip_boxes(&b, p, ref_is_a, face, p->a->radius, p->b->radius, reduce);
+    if (reduce) mk_mf_reduce(&g);
     REQUIRE(g.count == b.count, "case %d: %d candidates, general clip %d", c, b.count, g.count);
     for (i = 0; i < g.count; ++i) {
         REQUIRE(g.p[i].features == b.p[i].features, "case %d point %d: features %08x, general %08x", c, i, b.p[i].features,
@@ -131,7 +133,9 @@ START_TEST(box_clip_matches_general_clip)
             face = 2 * axis + ((axis == 0 ? d.x : axis == 1 ? d.y : d.z) >= 0);
         }
         /* Both modes' slops (minko/manifold.h), on alternate cases. */
-        n = compare(&p, ref_is_a, face, margin, rad > 0 && c % 2, (c / 6) % 2 ? MK_MF_SLOP_EXACT : MK_MF_SLOP_IDS, c);
+        n = compare(&p, ref_is_a, face, margin, rad > 0 && c % 2, (c / 6) % 2 ? MK_MF_SLOP_EXACT : MK_MF_SLOP_IDS, 0, c);
+        /* Reduced in the reference face's coordinates: the four mk_mf_reduce keeps. */
+        compare(&p, ref_is_a, face, margin, rad > 0 && c % 2, (c / 6) % 2 ? MK_MF_SLOP_EXACT : MK_MF_SLOP_IDS, 1, c);
         total += n > 0;
         many += n > 4;
     }
