@@ -280,7 +280,8 @@ static void ctx_init(sat_ctx *c, const mk_mat3 *R, mk_vec3 t, const mk_sat_optio
     axis_none(&c->edges);
 }
 
-/* The best axis overall; ties go to A's faces, then B's, then edges: face
+/* The kind of the best axis overall (choose() fills out->best and
+ * out->complete; finish() the rest); ties go to A's faces, then B's, then edges: face
  * contacts are the stabler. With a preference (a warm frame) the choice is
  * biased as mk_sat_options says: first the face kind (with hold_face, last
  * frame's kept while within the band of the better face), then edges only
@@ -294,7 +295,7 @@ static void ctx_init(sat_ctx *c, const mk_mat3 *R, mk_vec3 t, const mk_sat_optio
  * demos/bullet_scenes' 10-box tower drift 0.72 m against 0.37 m native
  * (0.27 m with the better face and the exact clip of MK_MANIFOLD_BEST_FACE),
  * hence the choice per pair. */
-static void finish(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *out)
+static mk_sat_kind choose(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *out)
 {
     const sat_axis *pick = &c->face_a;
     mk_sat_kind kind = MK_SAT_FACE_A;
@@ -302,14 +303,20 @@ static void finish(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *o
     out->best = mk_max(pick->sep, c->edges.sep);
     out->complete = !c->stopped;
     if (c->stopped || opt->prefer == MK_SAT_NONE) {
-        if (c->edges.sep > pick->sep) pick = &c->edges, kind = MK_SAT_EDGES;
+        if (c->edges.sep > pick->sep) kind = MK_SAT_EDGES;
     } else {
         mk_real band = opt->prefer_rel * mk_fabs_(out->best) + opt->prefer_abs;
         const sat_axis *f = opt->prefer == MK_SAT_FACE_A ? &c->face_a : &c->face_b;
         if (opt->hold_face && opt->prefer != MK_SAT_EDGES && opt->prefer != kind && f->sep >= pick->sep - band) pick = f, kind = opt->prefer;
-        if (c->edges.a >= 0 && c->edges.sep > pick->sep + (opt->prefer == MK_SAT_EDGES ? band / 2 : band))
-            pick = &c->edges, kind = MK_SAT_EDGES;
+        if (c->edges.a >= 0 && c->edges.sep > pick->sep + (opt->prefer == MK_SAT_EDGES ? band / 2 : band)) kind = MK_SAT_EDGES;
     }
+    return kind;
+}
+
+static void finish(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *out)
+{
+    mk_sat_kind kind = choose(c, opt, out);
+    const sat_axis *pick = kind == MK_SAT_FACE_A ? &c->face_a : kind == MK_SAT_FACE_B ? &c->face_b : &c->edges;
     out->kind = kind;
     out->a = pick->a;
     out->b = pick->b;
@@ -397,11 +404,6 @@ MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_
     }
 }
 
-/* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
- * frame), so every axis below is a few multiply-adds on scalars. Only the
- * index of the best axis of each kind is kept while testing; its normal is
- * built once at the end. The early stop looks at whole groups (A's faces,
- * B's faces, the edges): the answer is then the best of the groups tested. */
 /* The separation along opt->first (named as mk_sat_result names box axes:
  * a face index, or the box view's half-edges), kept only if it ends the
  * search. */
@@ -493,7 +495,6 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
     c.face_a.sep = c.face_b.sep = c.edges.sep = -MK_REAL_MAX;
     c.face_a.a = 0;
     c.face_b.a = c.face_b.b = -1;
-    c.face_b.n = mk_v3_zero();
     c.edges.a = c.edges.b = -1;
     /* Last frame's separating axis first: a pair that stays apart ends here. */
     if (opt->first != MK_SAT_NONE) box_first_axis(r, ar, a, b, d, db, opt, &c);
@@ -529,30 +530,25 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
         box_edge_axis(r, ar, a, b, d, 2, 2, &c.edges);
         if (c.edges.sep > c.stop) c.stopped = 1;
     }
-    if (c.face_a.sep > c.stop) {
-        /* Apart along a face of A, the common early stop: that axis alone. */
+    /* The normal and feature indices of the chosen axis only. */
+    out->kind = choose(&c, opt, out);
+    if (out->kind == MK_SAT_FACE_A) {
+        mk_real si;
         i = c.face_a.a;
-        out->kind = MK_SAT_FACE_A;
+        si = d[i] >= 0 ? 1 : -1;
         out->a = 2 * i + (d[i] >= 0);
         out->b = -1;
-        out->best = out->separation = c.face_a.sep;
-        out->normal = mk_v3(i == 0 ? (d[0] >= 0 ? 1 : -1) : 0, i == 1 ? (d[1] >= 0 ? 1 : -1) : 0, i == 2 ? (d[2] >= 0 ? 1 : -1) : 0);
-        out->complete = 0;
-        return;
-    }
-    /* The normals and feature indices of the kinds' winners. */
-    i = c.face_a.a;
-    c.face_a.n = mk_v3(i == 0 ? (d[0] >= 0 ? 1 : -1) : 0, i == 1 ? (d[1] >= 0 ? 1 : -1) : 0, i == 2 ? (d[2] >= 0 ? 1 : -1) : 0);
-    c.face_a.a = 2 * i + (d[i] >= 0);
-    c.face_a.b = -1;
-    if (c.face_b.sep > -MK_REAL_MAX) {
+        out->separation = c.face_a.sep;
+        out->normal = mk_v3(i == 0 ? si : 0, i == 1 ? si : 0, i == 2 ? si : 0);
+    } else if (out->kind == MK_SAT_FACE_B) {
         mk_real sj;
         j = c.face_b.b;
         sj = db[j] >= 0 ? 1 : -1;
-        c.face_b.n = mk_v3(sj * r[0][j], sj * r[1][j], sj * r[2][j]);
-        c.face_b.b = 2 * j + (db[j] < 0);
-    }
-    if (c.edges.a >= 0) {
+        out->a = -1;
+        out->b = 2 * j + (db[j] < 0);
+        out->separation = c.face_b.sep;
+        out->normal = mk_v3(sj * r[0][j], sj * r[1][j], sj * r[2][j]);
+    } else {
         /* L = e_i x R_j pointing from A to B; A's supporting edge sits at the
          * corner with the signs of L, B's at the corner with those of -R^T L. */
         i = c.edges.a;
@@ -561,9 +557,9 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
         if (L[0] * d[0] + L[1] * d[1] + L[2] * d[2] < 0) L[0] = -L[0], L[1] = -L[1], L[2] = -L[2];
         for (k = 0; k < 3; ++k) Lb[k] = -(r[0][k] * L[0] + r[1][k] * L[1] + r[2][k] * L[2]);
         l = mk_sqrt_(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
-        c.edges.n = mk_v3(L[0] / l, L[1] / l, L[2] / l);
-        c.edges.a = box_half_edge[box_edge(i, L)];
-        c.edges.b = box_half_edge[box_edge(j, Lb)];
+        out->a = box_half_edge[box_edge(i, L)];
+        out->b = box_half_edge[box_edge(j, Lb)];
+        out->separation = c.edges.sep;
+        out->normal = mk_v3(L[0] / l, L[1] / l, L[2] / l);
     }
-    finish(&c, opt, out);
 }
