@@ -28,8 +28,8 @@
  * (bounds from balls inside the cores) skip their support query or walk.
  * Measured (demos/bench_sat --quick --family F under valgrind
  * --tool=callgrind --toggle-collect=mk_sat[_box_box], instructions per
- * call, separated and penetrating cases together): box-box 1.0k by
- * mk_sat_box_box, 17k by mk_sat on box views (session 3); a box and a
+ * call, separated and penetrating cases together): box-box 0.85k by
+ * mk_sat_box_box (1.0k in session 3), 17k by mk_sat on box views (session 3); a box and a
  * 32-point hull 37k; hulls of 8/32/128 points 16k/59k/172k (session 3,
  * before the pruning: 69k; 28k/160k/712k). Minko's GJK + EPA answers hull pairs
  * faster (see the benchmark); SAT's value there is its feature output and
