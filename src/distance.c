@@ -354,15 +354,22 @@ static int box_box_sat(const mk_pair *p, answer *ans)
         n = s.normal;
         if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
         if (s.kind == MK_SAT_EDGES) { /* the closest points of the two supporting edges */
-            mk_vec3 a0, a1, b0, b1;
+            mk_vec3 a0, a1, b0, b1, ua, ub, ca, cb, c;
             mk_real u, v;
             box_support_edge(ha, n, &a0, &a1);
             box_support_edge(hb, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &b0, &b1);
-            b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
-            b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
-            mk_segment_segment(a0, a1, b0, b1, &u, &v);
-            pa = mk_v3_lerp(a0, a1, u);
-            pb = mk_v3_lerp(b0, b1, v);
+            /* Centres and half-edges, B's rotated before its offset is added: an
+             * edge tiny next to the distance keeps its direction (its ends
+             * would round together). */
+            ua = mk_v3_scale(mk_v3_sub(a1, a0), MK_REAL(0.5));
+            ca = mk_v3_scale(mk_v3_add(a0, a1), MK_REAL(0.5));
+            ub = mk_mat3_mul_v3(p->r, mk_v3_scale(mk_v3_sub(b1, b0), MK_REAL(0.5)));
+            cb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_v3_scale(mk_v3_add(b0, b1), MK_REAL(0.5))), p->t);
+            c = mk_v3_sub(cb, ca);
+            mk_segment_params(mk_v3_len2(ua), mk_v3_len2(ub), mk_v3_dot(ua, ub), mk_v3_dot(c, ua), mk_v3_dot(c, ub),
+                              mk_v3_len2(mk_v3_cross(ua, ub)), 1, 1, &u, &v);
+            pa = mk_v3_mad(ca, u, ua);
+            pb = mk_v3_mad(cb, v, ub);
             ok = mk_v3_max_abs(mk_v3_sub(mk_v3_sub(pb, pa), mk_v3_scale(n, d))) <= tol;
         }
         /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
