@@ -928,6 +928,14 @@ END_TEST
  * query (the bound is chosen so the quartic products of GJK stay finite);
  * a coordinate just beyond it is refused with MK_ERR_OUT_OF_RANGE by every
  * entry that takes a position. */
+/* Small shapes: unit ones in double; in float, shapes 1e-5 of the bound, so
+ * they still span a few hundred ulps of their position (a unit shape at
+ * 1e8 is below float's resolution there, 8 units). */
+#if defined(MK_SINGLE)
+#  define SMALL (MK_MAX_COORD * MK_REAL(1e-5))
+#else
+#  define SMALL 1
+#endif
 START_TEST(coordinate_range_in_every_entry)
 {
     const mk_real B = MK_MAX_COORD, beyond = MK_MAX_COORD * (1 + 2 * MK_REAL_EPSILON), S = MK_MAX_SIZE;
@@ -941,8 +949,8 @@ START_TEST(coordinate_range_in_every_entry)
     int t, u, z, k;
     for (k = 0; k < 8; ++k) big_cube[k] = mk_v3_scale(cube[k], S);
     MK_ASSERT_STATUS(mk_hull_create(big_cube, 8, NULL, &hull), MK_OK);
-    for (z = 0; z < 2; ++z) { /* unit shapes, then the largest sizes accepted */
-        mk_real m = z ? S : 1;
+    for (z = 0; z < 2; ++z) { /* small shapes, then the largest sizes accepted */
+        mk_real m = z ? S : SMALL;
         mk_shape_sphere(m, &sh[z][MK_SHAPE_SPHERE]);
         mk_shape_box(mk_v3(m, m, m), z ? S : 0, &sh[z][MK_SHAPE_BOX]);
         mk_shape_capsule(m, m, &sh[z][MK_SHAPE_CAPSULE]);
