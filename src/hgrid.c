@@ -726,7 +726,7 @@ static uint32_t next_state(const mk_bp *bp, const struct mk_hgrid *g, uint32_t a
     /* an index pair lives only while it overlaps: the queries find it again */
     if (!overlap) return s & ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED | MK_PS_STATIC);
     if (s & (MK_PS_LIVE | MK_PS_REJECTED)) return s;
-    return s | (mk_bp_filter_pass_(bp, a, b) ? MK_PS_LIVE : MK_PS_REJECTED);
+    return s | (mk_bp_filter_keeps_(bp, a, b) ? MK_PS_LIVE : MK_PS_REJECTED);
 }
 
 static void retest(mk_bp *bp, struct mk_hgrid *g, int all)
@@ -1120,7 +1120,7 @@ static int meet_static(void *c, uint32_t t, const mk_aabb *box)
     old = e->state;
     if (!(old & MK_PS_STATIC)) e->wake = 0; /* the re-test of this update sets it */
     e->state |= MK_PS_STATIC;
-    if (!(old & (MK_PS_LIVE | MK_PS_REJECTED))) e->state |= mk_bp_filter_pass_(bp, q->d, t) ? MK_PS_LIVE : MK_PS_REJECTED;
+    if (!(old & (MK_PS_LIVE | MK_PS_REJECTED))) e->state |= mk_bp_filter_keeps_(bp, q->d, t) ? MK_PS_LIVE : MK_PS_REJECTED;
     if ((e->state ^ old) & MK_PS_LIVE) mk_pairs_touch_(bp, e);
     return 1;
 }
