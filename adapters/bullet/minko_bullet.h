@@ -150,7 +150,9 @@ private:
 // pair when its algorithm is created. Each Minko algorithm writes the whole
 // manifold every step in Bullet's conventions (normal on B pointing from B to
 // A, point on B, negative distance = penetration, points up to the manifold's
-// contact breaking threshold apart kept as speculative contacts) and matches
+// contact breaking threshold apart kept as speculative contacts, except for
+// box-box pairs, which report touching points only, as Bullet's
+// btBoxBoxDetector does) and matches
 // points to the cached ones by Minko feature ID, so m_appliedImpulse follows
 // its contact (a point whose features changed in place is matched by
 // position, as Bullet matches; points not reported stay until Bullet's
