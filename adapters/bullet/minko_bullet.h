@@ -6,7 +6,9 @@
 // onto Minko shapes exactly, the way Bullet's own support functions define
 // them: a btBoxShape is the sharp box of its half extents (the margin is inside
 // them), a btConvexHullShape, btCylinderShape or btConeShape is its margin-free
-// core grown by the collision margin (Minko's rounding radius), spheres and
+// core grown by the collision margin (Minko's rounding radius; but two hulls
+// that both have polyhedral features meet as their margin-free cores, as in
+// Bullet's own hull-hull clipping), spheres and
 // capsules are their radius around a point or segment; capsule, cylinder and
 // cone axes (X, Y or Z) are carried by a fixed rotation from Minko's local z.
 // Shapes Minko does not model (meshes, compounds, ...) are refused with

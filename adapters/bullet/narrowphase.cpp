@@ -54,6 +54,15 @@ bool apart(const mk_shape &a, const mk_shape &b, const btTransform &rel, btScala
     return distance_lower_bound(b, a_in_b) - bound_radius(a) > threshold;
 }
 
+// Both shapes are hulls with polyhedral features
+// (btPolyhedralConvexShape::initializePolyhedralFeatures).
+bool polyhedral_hulls(const btCollisionShape *a, const btCollisionShape *b)
+{
+    return a->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE && b->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE &&
+           static_cast<const btPolyhedralConvexShape *>(a)->getConvexPolyhedron() &&
+           static_cast<const btPolyhedralConvexShape *>(b)->getConvexPolyhedron();
+}
+
 // One pair's algorithm: the two mapped shapes, Minko's per-pair cache (the
 // previous separating axis) and the manifold. Lives exactly as long as the
 // broadphase pair, in Bullet's algorithm pool.
@@ -100,13 +109,22 @@ public:
         mf.count = 0;
         mk_status st = refresh_map(wa->getCollisionShape(), &m_a);
         if (st == MK_OK) st = refresh_map(wb->getCollisionShape(), &m_b);
-        if (st == MK_OK && apart(m_a.shape, m_b.shape, rel, threshold)) {
+        // Two hulls with polyhedral features meet as Bullet's own algorithm
+        // has them meet: btConvexConvexAlgorithm then measures and clips the
+        // margin-free cores (btPolyhedralContactClipping; its GJK distance is
+        // corrected by both margins), so the pair rests with its cores
+        // touching. Measured on the native convex stack's poses (960 Taru
+        // hulls, margin 0.04): Bullet's depths are the cores', 0.080 shallower
+        // than the rounded solids'.
+        mk_shape sa = m_a.shape, sb = m_b.shape;
+        if (polyhedral_hulls(wa->getCollisionShape(), wb->getCollisionShape())) sa.radius = sb.radius = 0;
+        if (st == MK_OK && apart(sa, sb, rel, threshold)) {
             // Farther apart than the threshold: mk_collide would report no
             // point. What it leaves in the cache then (no preferred axis) is
             // a cold cache, and a pair that meets again starts cold.
             m_cache = mk_manifold_cache();
         } else if (st == MK_OK) {
-            st = mk_collide(&m_a.shape, mk_transform_make(mk_v3_zero(), m_a.axis), &m_b.shape, minko_pose(rel, m_b),
+            st = mk_collide(&sa, mk_transform_make(mk_v3_zero(), m_a.axis), &sb, minko_pose(rel, m_b),
                             threshold, &m_cache, &mf);
         }
         if (st != MK_OK) {
