@@ -49,14 +49,17 @@ typedef struct mk_sat_options {
     /* Face preference and hysteresis, with prefer set (usually the previous
      * frame's kind; MK_SAT_NONE = none, the exact best axis). Let band =
      * prefer_rel * |best| + prefer_abs. The face kind is the better face's,
-     * or the preferred face kind's if its separation is within band of it;
-     * an edge pair is reported only if it separates by more than that face
+     * or, with hold_face set (the default), the preferred face kind's if its
+     * separation is within band of it (MK_MANIFOLD_STABLE_IDS; without it,
+     * MK_MANIFOLD_BEST_FACE, the better face always wins, ties to A's); an
+     * edge pair is reported only if it separates by more than that face
      * plus band (band / 2 when prefer is MK_SAT_EDGES), as dBoxBox and Box2D
      * favour faces, so nearly parallel boxes clip face to face and an axis
      * does not flip on rounding. `best` itself is never biased; the
      * reported separation is below it by at most band. */
     mk_sat_kind prefer;
     mk_real prefer_rel, prefer_abs;
+    int hold_face;
     /* An axis to test before all others, named as mk_sat_result names one
      * (kind, a, b), usually the one that separated the pair last frame:
      * when it separates by more than stop_above the search ends there and
