@@ -154,7 +154,9 @@ private:
 // A, point on B, negative distance = penetration, points up to the manifold's
 // contact breaking threshold apart kept as speculative contacts, except for
 // box-box pairs, which report touching points only, as Bullet's
-// btBoxBoxDetector does) and matches
+// btBoxBoxDetector does), runs mk_collide in MK_MANIFOLD_BEST_FACE mode (the
+// minimum-penetration face every frame, as Bullet's own algorithms report)
+// and matches
 // points to the cached ones by Minko feature ID, so m_appliedImpulse follows
 // its contact (a point whose features changed in place is matched by
 // position, as Bullet matches; points not reported stay until Bullet's

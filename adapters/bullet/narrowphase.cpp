@@ -78,7 +78,7 @@ public:
           m_a(a),
           m_b(b)
     {
-        m_cache = mk_manifold_cache();  // zeroed: a cold start (minko/manifold.h)
+        start_cold();
     }
     ~Algorithm() override
     {
@@ -122,7 +122,7 @@ public:
             // Farther apart than the threshold: mk_collide would report no
             // point. What it leaves in the cache then (no preferred axis) is
             // a cold cache, and a pair that meets again starts cold.
-            m_cache = mk_manifold_cache();
+            start_cold();
         } else if (st == MK_OK) {
             st = mk_collide(&sa, mk_transform_make(mk_v3_zero(), m_a.axis), &sb, minko_pose(rel, m_b),
                             threshold, &m_cache, &mf);
@@ -177,6 +177,17 @@ public:
     }
 
 private:
+    // A zeroed cache is a cold start (minko/manifold.h). Bullet matches a
+    // point whose features changed by its position (contact_writer.h), so
+    // Bullet's pairs take the minimum-penetration face every frame rather
+    // than the face kind held for ID-only hosts: the held face tilts a
+    // rocking stack's normal by the boxes' relative tilt.
+    void start_cold()
+    {
+        m_cache = mk_manifold_cache();
+        m_cache.mode = MK_MANIFOLD_BEST_FACE;
+    }
+
     btPersistentManifold *m_manifold;
     bool m_own;
     const btCollisionShape *m_shape0;

@@ -1314,6 +1314,71 @@ START_TEST(np_shape_changes_seen)
 }
 END_TEST
 
+std::vector<btManifoldPoint> g_written;  // points written this frame (gContactAddedCallback)
+bool record_written(btManifoldPoint &p, const btCollisionObjectWrapper *, int, int, const btCollisionObjectWrapper *, int, int)
+{
+    g_written.push_back(p);
+    return false;
+}
+
+// Bullet's pairs run mk_collide in the minimum-penetration-face mode: a
+// pair algorithm kept warm over frames reports, every frame, the normal and
+// depth a cold call gives (no face kind held from the last frame). Two
+// equal boxes stacked and rocking, the upper one's tilt changing sign, is
+// the case where the ID-stable mode would keep last frame's face.
+START_TEST(np_warm_pairs_take_the_best_face)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btBoxShape box(btVector3(1, 1, 1));
+    btCollisionObject lower, upper;
+    lower.setCollisionShape(&box);
+    upper.setCollisionShape(&box);
+    upper.setCollisionFlags(upper.getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+    ContactAddedCallback saved = gContactAddedCallback;
+    gContactAddedCallback = record_written;
+    btTransform xl(btQuaternion(btVector3(0, 0, 1), btScalar(0.01)), btVector3(0, 0, 0));
+    lower.setWorldTransform(xl);
+    btCollisionObjectWrapper wl(nullptr, &box, &lower, xl, -1, -1);
+    btCollisionAlgorithm *algo = nullptr;
+    int compared = 0;
+    for (int k = 0; k < 40; k++) {
+        // The upper box's tilt swings between -0.03 and +0.03 rad: its own
+        // bottom face and the lower box's top face take turns being the
+        // shallower axis.
+        const btScalar tilt = btScalar(0.03 * std::sin(0.7 * k));
+        btTransform xu(btQuaternion(btVector3(0, 0, 1), tilt), btVector3(btScalar(0.05), btScalar(1.99), 0));
+        upper.setWorldTransform(xu);
+        btCollisionObjectWrapper wu(nullptr, &box, &upper, xu, -1, -1);
+        if (!algo) algo = dispatcher.findAlgorithm(&wl, &wu, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+        btManifoldResult result(&wl, &wu);
+        btDispatcherInfo info;
+        g_written.clear();
+        algo->processCollision(&wl, &wu, info, &result);
+        btManifoldArray manifolds;
+        algo->getAllContactManifolds(manifolds);
+        ck_assert_int_eq(manifolds.size(), 1);
+        const btPersistentManifold *m = manifolds[0];
+        const btManifoldPoint *warm = nullptr;
+        for (const btManifoldPoint &p : g_written)
+            if (!warm || p.getDistance() < warm->getDistance()) warm = &p;
+        std::vector<PointOut> cold = collide_once(&config, &box, xl, &box, xu);
+        const PointOut *c = deepest(cold);
+        ck_assert(c != nullptr && warm != nullptr);
+        const btVector3 n = m->getBody0() == &lower ? warm->m_normalWorldOnB : -warm->m_normalWorldOnB;
+        ck_assert_msg(n.dot(c->normal_on_b) >= 1 - kNormalTol, "frame %d: warm normal %g %g %g, cold %g %g %g", k,
+                      (double)n.x(), (double)n.y(), (double)n.z(), (double)c->normal_on_b.x(),
+                      (double)c->normal_on_b.y(), (double)c->normal_on_b.z());
+        MK_ASSERT_NEAR(warm->getDistance(), c->distance, kContactTol);
+        compared++;
+    }
+    ck_assert_int_eq(compared, 40);
+    gContactAddedCallback = saved;
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
+}
+END_TEST
+
 // A running world switches its narrowphase both ways; pairs get new
 // algorithms and the simulation goes on undisturbed.
 START_TEST(np_switch_at_run_time)
@@ -1520,6 +1585,7 @@ Suite *suite()
     tcase_add_test(n, np_near_pairs_never_skipped);
     tcase_add_test(n, np_world_rests_on_minko_contacts);
     tcase_add_test(n, np_shape_changes_seen);
+    tcase_add_test(n, np_warm_pairs_take_the_best_face);
     tcase_add_test(n, np_switch_at_run_time);
     suite_add_tcase(s, n);
     TCase *c = tcase_create("ccd");
