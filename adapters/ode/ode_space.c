@@ -10,10 +10,12 @@
  * build too.
  *
  * Why the per-geom work is so small:
- *  - proxies carry a fattened AABB (the geom's grown by FAT_MARGIN of its
- *    size) and move only when the geom's AABB leaves it, so geoms that rest
- *    or creep cost the broadphase nothing; the exact dReal test removes the
- *    extra candidate pairs this brings;
+ *  - proxies of slow geoms carry a fattened AABB (the geom's grown by
+ *    FAT_MARGIN of its size) and move only when the geom's AABB leaves it,
+ *    so geoms that rest or creep cost the broadphase nothing; the exact
+ *    dReal test removes the extra candidate pairs this brings;
+ *  - pairs map to records through an array indexed by the proxies' slots,
+ *    with no call per pair;
  *  - ODE keeps a space's list order unless a clean geom is dirtied, and geoms
  *    in a space only the adapter collides stay dirty, so the order of the
  *    previous call usually finds each geom's record without hashing;
@@ -32,15 +34,17 @@
 #include "ode_internal.h"
 #include "ode_map.h"
 
+/* The fields a candidate pair reads come first: with the slot map below,
+ * the pair loop touches two entries and nothing else. */
 typedef struct entry {
     dGeomID geom;     /* NULL: free slot */
-    mk_bp_id proxy;
-    uint32_t seen;    /* sync epoch that last found the geom in the space */
     uint32_t checked; /* sync epoch of the filter fields below */
     int ok;           /* enabled and not zero-sized */
     dBodyID body;
     unsigned long cat, col;
     dReal aabb[6];    /* ODE's interleaved AABB {minx, maxx, miny, maxy, minz, maxz} */
+    mk_bp_id proxy;
+    uint32_t seen;    /* sync epoch that last found the geom in the space */
     mk_aabb fat;      /* the proxy's AABB: contains aabb, rounded outwards */
 } entry;
 
@@ -53,6 +57,7 @@ typedef struct space_state {
     mk_bp *bp;
     int capacity;     /* proxy capacity of bp */
     entry *entries;   /* slots; a proxy's user pointer is its slot + 1 */
+    int *of_proxy;    /* MK_BP_SLOT(proxy) -> slot, so pairs need no call per proxy */
     int nslots, capslots, live;
     int *free_slots;
     int nfree;
@@ -118,14 +123,18 @@ static int zero_sized(dGeomID g)
     }
 }
 
-static void check_entry(const space_state *st, entry *e)
+static void read_filter(const space_state *st, entry *e)
 {
-    if (e->checked == st->epoch) return;
     e->checked = st->epoch;
     e->ok = dGeomIsEnabled(e->geom) && !zero_sized(e->geom);
     e->body = dGeomGetBody(e->geom);
     e->cat = dGeomGetCategoryBits(e->geom);
     e->col = dGeomGetCollideBits(e->geom);
+}
+
+static void check_entry(const space_state *st, entry *e)
+{
+    if (e->checked != st->epoch) read_filter(st, e);
 }
 
 /* collideAABBs' tests in its order, on exact dReal AABBs (a NaN bound
@@ -192,16 +201,26 @@ static int inside_fat(const dReal *b, const mk_aabb *fat)
            (dReal)fat->lo.z <= b[4] && b[5] <= (dReal)fat->hi.z;
 }
 
-/* The proxy's box: the geom's grown by FAT_MARGIN of its largest finite extent. */
-static mk_aabb fat_box(const dReal *b)
+/* The proxy's box. A geom whose AABB moved by at most FAT_MARGIN of its
+ * largest finite extent since the last call gets its box grown by that
+ * margin on each side, so that while it rests or creeps its proxy stays put;
+ * a faster geom would leave such a box at the next call anyway, and the
+ * margin would only add candidate pairs (and taller rows to the broadphase's
+ * sweep), so it gets its exact box. `old` is NULL for a new geom. */
+static mk_aabb proxy_box(const dReal *old, const dReal *b)
 {
-    dReal size = 0;
+    dReal size = 0, travel = 0, grow;
     int k;
     for (k = 0; k < 3; k++) {
         dReal e = b[2 * k + 1] - b[2 * k];
         if (e > size && e <= DBL_MAX) size = e;
     }
-    return to_mk_aabb_grown(b, FAT_MARGIN * size);
+    grow = FAT_MARGIN * size;
+    for (k = 0; old && k < 6; k++) {
+        dReal d = fabs(b[k] - old[k]); /* NaN (inf - inf) says nothing */
+        if (d > travel) travel = d;
+    }
+    return to_mk_aabb_grown(b, travel <= grow ? grow : 0);
 }
 
 /* ---- per-space state ---- */
@@ -209,7 +228,10 @@ static mk_aabb fat_box(const dReal *b)
 static void *slot_user(int slot) { return (void *)(uintptr_t)(slot + 1); }
 static int user_slot(void *user) { return (int)(uintptr_t)user - 1; }
 
-static mk_status create_bp(space_state *st, int capacity)
+/* A broadphase of `capacity` proxies holding every entry's proxy box; the
+ * new ids go to ids[slot] and the slot map to of_proxy, so that a failure
+ * leaves `st` as it was. */
+static mk_status new_bp(const space_state *st, int capacity, mk_bp **out, mk_bp_id *ids, int *of_proxy)
 {
     mk_bp_def def = mk_bp_default_def();
     int i;
@@ -223,40 +245,47 @@ static mk_status create_bp(space_state *st, int capacity)
     /* The near callback gets the whole set each call, never the changes:
      * lets incoherent frames (the heap exploding) skip the pair table. */
     def.pairs_only = 1;
-    s = mk_bp_create(&def, NULL, &st->bp);
+    s = mk_bp_create(&def, NULL, out);
     if (s == MK_ERR_UNSUPPORTED) { /* a build without SAP (MK_WITHOUT) */
         def.kind = MK_BP_AUTO;
-        s = mk_bp_create(&def, NULL, &st->bp);
+        s = mk_bp_create(&def, NULL, out);
     }
-    if (s != MK_OK) return s;
-    st->capacity = capacity;
-    for (i = 0; i < st->nslots; i++) {
-        entry *e = &st->entries[i];
+    for (i = 0; s == MK_OK && i < st->nslots; i++) {
+        const entry *e = &st->entries[i];
         if (!e->geom) continue;
-        s = mk_bp_create_proxy(st->bp, e->fat, slot_user(i), ~(uint64_t)0, ~(uint64_t)0, 0, &e->proxy);
-        if (s != MK_OK) return s;
+        s = mk_bp_create_proxy(*out, e->fat, slot_user(i), ~(uint64_t)0, ~(uint64_t)0, 0, &ids[i]);
+        if (s == MK_OK) of_proxy[MK_BP_SLOT(ids[i])] = i;
     }
-    return MK_OK;
+    return s;
 }
 
 /* The broadphase's proxy capacity is fixed at creation: rebuild it twice as
  * large when the space outgrows it (not a steady-state event). */
 static mk_status reserve(space_state *st, int n)
 {
-    int cap = st->capacity;
-    mk_bp *old = st->bp;
+    int cap = st->capacity, i, *of_proxy;
+    mk_bp *bp = NULL;
+    mk_bp_id *ids;
     mk_status s;
     if (n <= cap && st->bp) return MK_OK;
     while (cap < n) cap = cap ? 2 * cap : 256;
-    st->bp = NULL;
-    s = create_bp(st, cap);
-    if (s != MK_OK) {
+    ids = malloc(((size_t)st->nslots + 1) * sizeof *ids);
+    of_proxy = malloc((size_t)cap * sizeof *of_proxy);
+    s = ids && of_proxy ? new_bp(st, cap, &bp, ids, of_proxy) : MK_ERR_OUT_OF_MEMORY;
+    if (s == MK_OK) {
+        for (i = 0; i < st->nslots; i++)
+            if (st->entries[i].geom) st->entries[i].proxy = ids[i];
         if (st->bp) mk_bp_destroy(st->bp);
-        st->bp = old;
-        return s;
+        free(st->of_proxy);
+        st->bp = bp;
+        st->of_proxy = of_proxy;
+        st->capacity = cap;
+    } else {
+        if (bp) mk_bp_destroy(bp);
+        free(of_proxy);
     }
-    if (old) mk_bp_destroy(old);
-    return MK_OK;
+    free(ids);
+    return s;
 }
 
 static space_state *state_for(dSpaceID space)
@@ -284,6 +313,7 @@ static void free_state(space_state *st)
 {
     if (st->bp) mk_bp_destroy(st->bp);
     free(st->entries);
+    free(st->of_proxy);
     free(st->free_slots);
     free(st->order);
     mk_ode_map_free(&st->index);
@@ -312,7 +342,7 @@ static mk_status add_entry(space_state *st, dGeomID g, const dReal *box, long *o
     memset(e, 0, sizeof *e);
     e->geom = g;
     memcpy(e->aabb, box, sizeof e->aabb);
-    e->fat = fat_box(box);
+    e->fat = proxy_box(NULL, box);
     s = mk_bp_create_proxy(st->bp, e->fat, slot_user(slot), ~(uint64_t)0, ~(uint64_t)0, 0, &e->proxy);
     if (s == MK_OK && mk_ode_map_put(&st->index, g, NULL, (uint32_t)slot) != 0) {
         mk_bp_destroy_proxy(st->bp, e->proxy);
@@ -323,6 +353,7 @@ static mk_status add_entry(space_state *st, dGeomID g, const dReal *box, long *o
         st->free_slots[st->nfree++] = slot;
         return s;
     }
+    st->of_proxy[MK_BP_SLOT(e->proxy)] = slot;
     st->live++;
     *out = slot;
     return MK_OK;
@@ -363,12 +394,12 @@ static mk_status sync(space_state *st)
             if (s != MK_OK) return s;
         } else if (memcmp(st->entries[slot].aabb, box, sizeof box) != 0) {
             e = &st->entries[slot];
-            memcpy(e->aabb, box, sizeof box);
             if (!inside_fat(box, &e->fat)) {
-                e->fat = fat_box(box);
+                e->fat = proxy_box(e->aabb, box);
                 s = mk_bp_move_proxy(st->bp, e->proxy, e->fat);
                 if (s != MK_OK) return s;
             }
+            memcpy(e->aabb, box, sizeof box);
         }
         st->entries[slot].seen = st->epoch;
         st->order[i] = (int)slot;
@@ -427,15 +458,20 @@ void mk_ode_space_collide(dSpaceID space, void *data, dNearCallback *callback)
         return;
     }
     pairs = mk_bp_pairs(st->bp, &np);
+    /* Room for every candidate up front: the loop below only stores. */
+    if (grow_array((void **)&report, &capreport, nreport + (size_t)np, sizeof *report) != 0) {
+        note_error(MK_ERR_OUT_OF_MEMORY);
+        return;
+    }
     for (i = 0; i < np; i++) {
-        entry *a = &st->entries[user_slot(mk_bp_user(st->bp, pairs[i].a))];
-        entry *b = &st->entries[user_slot(mk_bp_user(st->bp, pairs[i].b))];
+        entry *a = &st->entries[st->of_proxy[MK_BP_SLOT(pairs[i].a)]];
+        entry *b = &st->entries[st->of_proxy[MK_BP_SLOT(pairs[i].b)]];
         check_entry(st, a);
         check_entry(st, b);
-        if (a->ok && b->ok && ode_filter(a->body, a->cat, a->col, a->aabb, b->body, b->cat, b->col, b->aabb) &&
-            push_pair(a->geom, b->geom) != 0) {
-            note_error(MK_ERR_OUT_OF_MEMORY);
-            break;
+        if (a->ok && b->ok && ode_filter(a->body, a->cat, a->col, a->aabb, b->body, b->cat, b->col, b->aabb)) {
+            report[nreport].a = a->geom;
+            report[nreport].b = b->geom;
+            nreport++;
         }
     }
     flush(from, data, callback);
