@@ -1,6 +1,7 @@
 /* broadphase.c: the common API in front of brute force, SAP and the grid:
  * proxies and their ids, input checks, the update driver, AUTO's choice,
  * queries and ray casts. See minko/broadphase.h for the contract. */
+#include <stddef.h>
 #include <string.h>
 
 #include "alloc.h"
@@ -227,18 +228,56 @@ mk_status mk_bp_destroy_proxy(mk_bp *bp, mk_bp_id id)
     return MK_OK;
 }
 
-mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box)
+/* One move, shared by the single and the batch call (bp is not NULL). */
+static inline mk_status move_one(mk_bp *bp, mk_bp_id id, const mk_aabb *box)
 {
     int s;
     mk_status st;
-    if (!bp) return MK_ERR_NULL;
     if ((s = slot_of(bp, id)) < 0) return MK_ERR_UNKNOWN_ID;
-    if ((st = check_box(&box)) != MK_OK) return st;
-    if (same_box(&bp->next[s], &box)) return MK_OK; /* a resting body is not a mover */
-    bp->next[s] = box;
-    if (bp->flags[s] & MK_PF_NEW) bp->box[s] = box;
+    if ((st = check_box(box)) != MK_OK) return st;
+    if (same_box(&bp->next[s], box)) return MK_OK; /* a resting body is not a mover */
+    bp->next[s] = *box;
+    if (bp->flags[s] & MK_PF_NEW) bp->box[s] = *box;
     else mark_dirty(bp, (uint32_t)s, MK_PF_MOVED);
     return MK_OK;
+}
+
+mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box)
+{
+    if (!bp) return MK_ERR_NULL;
+    return move_one(bp, id, &box);
+}
+
+/* Alignments of the batch's element types, in C99 (no alignof). */
+struct align_id_ { char c; mk_bp_id t; };
+struct align_box_ { char c; mk_aabb t; };
+#define ALIGN_ID_ offsetof(struct align_id_, t)
+#define ALIGN_BOX_ offsetof(struct align_box_, t)
+
+mk_status mk_bp_move_proxies(mk_bp *bp, const mk_bp_id *ids, size_t id_stride, const mk_aabb *boxes, size_t box_stride,
+                             int n, int *done)
+{
+    const char *pi = (const char *)ids, *pb = (const char *)boxes;
+    mk_status st = MK_OK;
+    int i;
+    if (done) *done = 0;
+    if (!bp) return MK_ERR_NULL;
+    if (n < 0) return MK_ERR_BAD_SIZE;
+    if (n == 0) return MK_OK;
+    if (!ids || !boxes) return MK_ERR_NULL;
+    if (!id_stride) id_stride = sizeof *ids;
+    if (!box_stride) box_stride = sizeof *boxes;
+    /* Every element read must be aligned for its type (a misaligned read is
+     * undefined behaviour, and a trap on some embedded targets). */
+    if ((uintptr_t)ids % ALIGN_ID_ || id_stride % ALIGN_ID_ || (uintptr_t)boxes % ALIGN_BOX_ || box_stride % ALIGN_BOX_)
+        return MK_ERR_BAD_ARGUMENT;
+    for (i = 0; i < n; ++i, pi += id_stride, pb += box_stride) {
+        mk_bp_id id = *(const mk_bp_id *)(const void *)pi;
+        if (id == MK_BP_NULL_ID) continue; /* a free slot of the host's array */
+        if ((st = move_one(bp, id, (const mk_aabb *)(const void *)pb)) != MK_OK) break;
+    }
+    if (done) *done = i;
+    return st;
 }
 
 mk_status mk_bp_set_filter(mk_bp *bp, mk_bp_id id, uint64_t cat, uint64_t mask)

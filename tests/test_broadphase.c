@@ -15,7 +15,7 @@ static const mk_bp_kind kinds[NKIND] = {MK_BP_BRUTE, MK_BP_SAP, MK_BP_HGRID, MK_
 static const int only_pairs[NKIND] = {0, 0, 0, 0, 1};
 #define K_SAP_SET 4
 
-static const char *name_of(int k) { return only_pairs[k] ? "sap pairs_only" : name_of(k); }
+static const char *name_of(int k) { return only_pairs[k] ? "sap pairs_only" : mk_bp_kind_name(kinds[k]); }
 
 typedef struct obj { int alive, is_static; mk_aabb box; mk_vec3 vel; mk_bp_id id[NKIND]; } obj;
 
@@ -851,6 +851,126 @@ START_TEST(ids_and_stats)
 }
 END_TEST
 
+/* A host's own array of bodies: the batch reads ids and boxes out of it. */
+typedef struct host_body { double mass; mk_bp_id id; mk_aabb box; char tag; } host_body;
+
+static void same_output(mk_bp *x, mk_bp *y, int frame)
+{
+    int nx, ny;
+    const mk_bp_pair *px = mk_bp_pairs(x, &nx), *py = mk_bp_pairs(y, &ny);
+    ck_assert_msg(nx == ny, "frame %d: batch %d pairs, single moves %d", frame, nx, ny);
+    ck_assert_msg(nx == 0 || memcmp(px, py, sizeof *px * (size_t)nx) == 0, "frame %d: sets differ", frame);
+    px = mk_bp_added(x, &nx); py = mk_bp_added(y, &ny);
+    ck_assert_msg(nx == ny && (nx == 0 || memcmp(px, py, sizeof *px * (size_t)nx) == 0), "frame %d: added differ", frame);
+    px = mk_bp_removed(x, &nx); py = mk_bp_removed(y, &ny);
+    ck_assert_msg(nx == ny && (nx == 0 || memcmp(px, py, sizeof *px * (size_t)nx) == 0), "frame %d: removed differ", frame);
+}
+
+/* mk_bp_move_proxies from a strided host array (with free slots, resting
+ * bodies and teleports) gives the same sets and events as single moves, for
+ * every kind; the two broadphases get the same ids since they see the same
+ * creations. */
+START_TEST(batch_moves_match_single_moves)
+{
+    enum { N = 300, FRAMES = 60 };
+    static host_body body[N];
+    int k, i, f;
+    for (k = 0; k < NKIND; ++k) {
+        mk_rng rng;
+        mk_bp *single, *batch;
+        mk_bp_def d = mk_bp_default_def();
+        d.kind = kinds[k];
+        d.pairs_only = only_pairs[k];
+        d.proxy_capacity = N;
+        if (mk_bp_create(&d, NULL, &single) == MK_ERR_UNSUPPORTED) continue;
+        MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &batch), MK_OK);
+        rng.s = 31 + (uint64_t)k;
+        for (i = 0; i < N; ++i) {
+            mk_vec3 c = mk_rng_v3(&rng, 0, 20);
+            mk_bp_id other;
+            body[i].box = mk_aabb_make(c, mk_v3_add(c, mk_v3(1, 1, 1)));
+            MK_ASSERT_STATUS(mk_bp_create_proxy(batch, body[i].box, NULL, 1, 1, i % 10 == 0, &body[i].id), MK_OK);
+            MK_ASSERT_STATUS(mk_bp_create_proxy(single, body[i].box, NULL, 1, 1, i % 10 == 0, &other), MK_OK);
+            ck_assert_uint_eq(other, body[i].id);
+        }
+        for (f = 0; f < FRAMES; ++f) {
+            int done = -1;
+            for (i = 0; i < N; ++i) {
+                double r = mk_rng_unit(&rng);
+                if (body[i].id == MK_BP_NULL_ID || r < 0.3) continue; /* resting */
+                if (r < 0.32) { /* teleport */
+                    mk_vec3 c = mk_rng_v3(&rng, 0, 20);
+                    body[i].box = mk_aabb_make(c, mk_v3_add(c, mk_v3(1, 1, 1)));
+                } else {
+                    mk_vec3 v = mk_rng_v3(&rng, -0.1, 0.1);
+                    body[i].box = mk_aabb_make(mk_v3_add(body[i].box.lo, v), mk_v3_add(body[i].box.hi, v));
+                }
+                MK_ASSERT_STATUS(mk_bp_move_proxy(single, body[i].id, body[i].box), MK_OK);
+            }
+            if (f == 20) /* a host slot freed: its id goes NULL and the batch skips it */
+                for (i = 0; i < N; i += 37) {
+                    MK_ASSERT_STATUS(mk_bp_destroy_proxy(single, body[i].id), MK_OK);
+                    MK_ASSERT_STATUS(mk_bp_destroy_proxy(batch, body[i].id), MK_OK);
+                    body[i].id = MK_BP_NULL_ID;
+                }
+            MK_ASSERT_STATUS(mk_bp_move_proxies(batch, &body[0].id, sizeof *body, &body[0].box, sizeof *body, N, &done), MK_OK);
+            ck_assert_int_eq(done, N);
+            MK_ASSERT_STATUS(mk_bp_update(single), MK_OK);
+            MK_ASSERT_STATUS(mk_bp_update(batch), MK_OK);
+            same_output(batch, single, f);
+        }
+        mk_bp_destroy(single);
+        mk_bp_destroy(batch);
+    }
+}
+END_TEST
+
+/* The batch stops at the first bad entry: the ones before it moved, it and
+ * the ones after it did not; argument checks move nothing. */
+START_TEST(batch_moves_bad_input)
+{
+    mk_bp *bp;
+    mk_bp_id ids[4];
+    mk_aabb boxes[4], got;
+    char raw[sizeof(mk_aabb) * 2 + 16];
+    int i, done = -1;
+    MK_ASSERT_STATUS(mk_bp_create(NULL, NULL, &bp), MK_OK);
+    for (i = 0; i < 4; ++i) {
+        boxes[i] = mk_aabb_make(mk_v3(3 * i, 0, 0), mk_v3(3 * i + 1, 1, 1));
+        MK_ASSERT_STATUS(mk_bp_create_proxy(bp, boxes[i], NULL, 1, 1, 0, &ids[i]), MK_OK);
+    }
+    MK_ASSERT_STATUS(mk_bp_update(bp), MK_OK);
+    for (i = 0; i < 4; ++i) { boxes[i].lo.y += 5; boxes[i].hi.y += 5; }
+    boxes[2].lo.x = (mk_real)NAN;
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, ids, 0, boxes, 0, 4, &done), MK_ERR_BAD_AABB);
+    ck_assert_int_eq(done, 2);
+    for (i = 0; i < 4; ++i) {
+        MK_ASSERT_STATUS(mk_bp_get_proxy(bp, ids[i], &got, NULL), MK_OK);
+        MK_ASSERT_NEAR(got.lo.y, i < 2 ? 5 : 0, 0);
+    }
+    boxes[2].lo.x = 6;
+    ids[1] = 0xFFFFFF01u;
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, ids, 0, boxes, 0, 4, &done), MK_ERR_UNKNOWN_ID);
+    ck_assert_int_eq(done, 1);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, ids + 2, 0, boxes + 2, 0, 2, NULL), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_get_proxy(bp, ids[3], &got, NULL), MK_OK);
+    MK_ASSERT_NEAR(got.lo.y, 5, 0);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, ids, 0, boxes, 0, -1, &done), MK_ERR_BAD_SIZE);
+    ck_assert_int_eq(done, 0);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, NULL, 0, boxes, 0, 1, &done), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, ids, 0, NULL, 0, 1, &done), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(NULL, ids, 0, boxes, 0, 1, &done), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, NULL, 0, NULL, 0, 0, &done), MK_OK);
+    ck_assert_int_eq(done, 0);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, ids, 3, boxes, 0, 1, &done), MK_ERR_BAD_ARGUMENT);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, ids, 0, boxes, sizeof(mk_real) + 1, 1, &done), MK_ERR_BAD_ARGUMENT);
+    MK_ASSERT_STATUS(mk_bp_move_proxies(bp, ids, 0, (const mk_aabb *)(const void *)(raw + 1), 0, 1, &done), MK_ERR_BAD_ARGUMENT);
+    ck_assert_int_eq(done, 0);
+    MK_ASSERT_STATUS(mk_bp_update(bp), MK_OK);
+    mk_bp_destroy(bp);
+}
+END_TEST
+
 static Suite *broadphase_suite(void)
 {
     Suite *s = suite_create("broadphase");
@@ -876,6 +996,8 @@ static Suite *broadphase_suite(void)
     tcase_add_test(tc, swept_box_and_clipping);
     tcase_add_test(tc, steady_state_does_not_allocate);
     tcase_add_test(tc, fixed_capacity_overflow_recovers);
+    tcase_add_test(tc, batch_moves_match_single_moves);
+    tcase_add_test(tc, batch_moves_bad_input);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -173,6 +173,21 @@ MK_API mk_status mk_bp_destroy_proxy(mk_bp *bp, mk_bp_id id);
 /* New AABB; O(1), the structure catches up in mk_bp_update(). The same AABB
  * as the last one given is not a move (resting bodies cost nothing). */
 MK_API mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box);
+/* n moves in one call, for a host that keeps its proxies' ids and AABBs in
+ * its own arrays: entry i moves the proxy whose id is at (char *)ids + i *
+ * id_stride to the AABB at (char *)boxes + i * box_stride (strides in bytes,
+ * 0 = packed arrays; ids and boxes may point into the same array of host
+ * structs). Entries whose id is MK_BP_NULL_ID are skipped (free slots of the
+ * host's array). Same semantics as n calls of mk_bp_move_proxy() in order: an
+ * unchanged AABB is a no-op, each AABB is checked. The batch stops at the
+ * first entry that fails: the entries before it are moved, it and the ones
+ * after it are not, *done (if not NULL) gets its index (n when all
+ * succeeded) and its status is returned. MK_ERR_BAD_SIZE for n < 0,
+ * MK_ERR_NULL for a NULL array with n > 0, MK_ERR_BAD_ARGUMENT for a pointer
+ * or stride not aligned for its element type (*done = 0 for these). O(n),
+ * no allocation. */
+MK_API mk_status mk_bp_move_proxies(mk_bp *bp, const mk_bp_id *ids, size_t id_stride, const mk_aabb *boxes,
+                                    size_t box_stride, int n, int *done);
 /* New filter words: the proxy's pairs are re-filtered at the next update. */
 MK_API mk_status mk_bp_set_filter(mk_bp *bp, mk_bp_id id, uint64_t cat, uint64_t mask);
 MK_API mk_status mk_bp_get_proxy(const mk_bp *bp, mk_bp_id id, mk_aabb *box, void **user);
