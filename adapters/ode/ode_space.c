@@ -10,10 +10,10 @@
  * build too.
  *
  * Why the per-geom work is so small:
- *  - proxies of slow geoms carry a fattened AABB (the geom's grown by
- *    FAT_MARGIN of its size) and move only when the geom's AABB leaves it,
- *    so geoms that rest or creep cost the broadphase nothing; the exact
- *    dReal test removes the extra candidate pairs this brings;
+ *  - proxies carry a fattened AABB (the geom's grown by FAT_MARGIN of its
+ *    size) and move only when the geom's AABB leaves it, so geoms that rest
+ *    or creep cost the broadphase nothing; the exact dReal test removes the
+ *    extra candidate pairs this brings; the moves go in one batch;
  *  - pairs map to records through an array indexed by the proxies' slots,
  *    with no call per pair;
  *  - ODE keeps a space's list order unless a clean geom is dirtied, and geoms
@@ -64,6 +64,8 @@ typedef struct space_state {
     mk_ode_map index; /* dGeomID -> slot */
     int *order;       /* slot of the i-th geom of the previous enumeration */
     size_t norder, caporder;
+    struct move { mk_bp_id proxy; int slot; mk_aabb box; } *moves; /* one call's proxy moves, made in one batch */
+    size_t capmoves;
     uint32_t epoch;
 } space_state;
 
@@ -169,24 +171,40 @@ static mk_real round_up(dReal x)
 }
 
 /* The broadphase refuses NaN and inverted boxes; ODE never separates a NaN
- * bound, so such an axis is treated as filling all space. `grow` widens
- * each side (0 for the exact box); the result contains the dReal box. */
+ * bound, so such an axis is treated as filling all space. `grow` (>= 0)
+ * widens each side (0 for the exact box); the result contains the dReal
+ * box. A side at +inf (or -inf) on both ends becomes the largest finite
+ * value to infinity, since the broadphase refuses lo = +inf and hi = -inf. */
 static mk_aabb to_mk_aabb_grown(const dReal *b, dReal grow)
 {
     mk_aabb box;
     mk_real inf = (mk_real)HUGE_VAL, *lo = &box.lo.x, *hi = &box.hi.x;
     int k;
+#if !defined(MK_SINGLE)
+    /* mk_real is dReal: a box with ordered, finite bounds (every geom but
+     * planes) converts without rounding or special cases. */
+    if ((b[0] <= b[1]) & (b[2] <= b[3]) & (b[4] <= b[5]) & (b[0] <= DBL_MAX) & (b[2] <= DBL_MAX) & (b[4] <= DBL_MAX) &
+        (b[1] >= -DBL_MAX) & (b[3] >= -DBL_MAX) & (b[5] >= -DBL_MAX)) {
+        box.lo = mk_v3(b[0] - grow, b[2] - grow, b[4] - grow);
+        box.hi = mk_v3(b[1] + grow, b[3] + grow, b[5] + grow);
+        return box;
+    }
+#endif
     for (k = 0; k < 3; k++) {
         dReal l = b[2 * k], h = b[2 * k + 1];
         if (!(l <= h)) {
             lo[k] = -inf;
             hi[k] = inf;
-            continue;
+        } else if (l == (dReal)HUGE_VAL) {
+            lo[k] = MK_REAL_MAX;
+            hi[k] = inf;
+        } else if (h == -(dReal)HUGE_VAL) {
+            lo[k] = -inf;
+            hi[k] = -MK_REAL_MAX;
+        } else {
+            lo[k] = round_down(l - grow);
+            hi[k] = round_up(h + grow);
         }
-        lo[k] = round_down(l - grow); /* inf - grow stays inf */
-        hi[k] = round_up(h + grow);
-        if (lo[k] == inf) lo[k] = MK_REAL_MAX;
-        if (hi[k] == -inf) hi[k] = -MK_REAL_MAX;
     }
     return box;
 }
@@ -201,26 +219,14 @@ static int inside_fat(const dReal *b, const mk_aabb *fat)
            (dReal)fat->lo.z <= b[4] && b[5] <= (dReal)fat->hi.z;
 }
 
-/* The proxy's box. A geom whose AABB moved by at most FAT_MARGIN of its
- * largest finite extent since the last call gets its box grown by that
- * margin on each side, so that while it rests or creeps its proxy stays put;
- * a faster geom would leave such a box at the next call anyway, and the
- * margin would only add candidate pairs (and taller rows to the broadphase's
- * sweep), so it gets its exact box. `old` is NULL for a new geom. */
-static mk_aabb proxy_box(const dReal *old, const dReal *b)
+/* The proxy's box: the geom's grown by FAT_MARGIN of its largest finite extent. */
+static mk_aabb fat_box(const dReal *b)
 {
-    dReal size = 0, travel = 0, grow;
+    dReal size = 0, e;
     int k;
-    for (k = 0; k < 3; k++) {
-        dReal e = b[2 * k + 1] - b[2 * k];
-        if (e > size && e <= DBL_MAX) size = e;
-    }
-    grow = FAT_MARGIN * size;
-    for (k = 0; old && k < 6; k++) {
-        dReal d = fabs(b[k] - old[k]); /* NaN (inf - inf) says nothing */
-        if (d > travel) travel = d;
-    }
-    return to_mk_aabb_grown(b, travel <= grow ? grow : 0);
+    for (k = 0; k < 3; k++)
+        if ((e = b[2 * k + 1] - b[2 * k]) > size && e <= DBL_MAX) size = e;
+    return to_mk_aabb_grown(b, FAT_MARGIN * size);
 }
 
 /* ---- per-space state ---- */
@@ -316,6 +322,7 @@ static void free_state(space_state *st)
     free(st->of_proxy);
     free(st->free_slots);
     free(st->order);
+    free(st->moves);
     mk_ode_map_free(&st->index);
     free(st);
 }
@@ -342,7 +349,7 @@ static mk_status add_entry(space_state *st, dGeomID g, const dReal *box, long *o
     memset(e, 0, sizeof *e);
     e->geom = g;
     memcpy(e->aabb, box, sizeof e->aabb);
-    e->fat = proxy_box(NULL, box);
+    e->fat = fat_box(box);
     s = mk_bp_create_proxy(st->bp, e->fat, slot_user(slot), ~(uint64_t)0, ~(uint64_t)0, 0, &e->proxy);
     if (s == MK_OK && mk_ode_map_put(&st->index, g, NULL, (uint32_t)slot) != 0) {
         mk_bp_destroy_proxy(st->bp, e->proxy);
@@ -377,10 +384,12 @@ static void remove_entry(space_state *st, int slot)
  * geom just looks moved, which is right: nothing else is cached across calls. */
 static mk_status sync(space_state *st)
 {
-    int n = dSpaceGetNumGeoms(st->space), i;
-    mk_status s = reserve(st, n);
+    int n = dSpaceGetNumGeoms(st->space), i, k, nmoves = 0, done;
+    mk_status sm, s = reserve(st, n);
     if (s != MK_OK) return s;
-    if (grow_array((void **)&st->order, &st->caporder, (size_t)n, sizeof *st->order) != 0) return MK_ERR_OUT_OF_MEMORY;
+    if (grow_array((void **)&st->order, &st->caporder, (size_t)n, sizeof *st->order) != 0 ||
+        grow_array((void **)&st->moves, &st->capmoves, (size_t)n, sizeof *st->moves) != 0)
+        return MK_ERR_OUT_OF_MEMORY;
     st->epoch++;
     for (i = 0; i < n; i++) {
         dGeomID g = dSpaceGetGeom(st->space, i); /* sequential access is O(1) in ODE */
@@ -391,19 +400,28 @@ static mk_status sync(space_state *st)
         dGeomGetAABB(g, box);
         if (slot < 0) {
             s = add_entry(st, g, box, &slot);
-            if (s != MK_OK) return s;
+            if (s != MK_OK) break;
         } else if (memcmp(st->entries[slot].aabb, box, sizeof box) != 0) {
             e = &st->entries[slot];
             if (!inside_fat(box, &e->fat)) {
-                e->fat = proxy_box(e->aabb, box);
-                s = mk_bp_move_proxy(st->bp, e->proxy, e->fat);
-                if (s != MK_OK) return s;
+                e->fat = fat_box(box);
+                st->moves[nmoves].proxy = e->proxy;
+                st->moves[nmoves].slot = (int)slot;
+                st->moves[nmoves].box = e->fat;
+                nmoves++;
             }
             memcpy(e->aabb, box, sizeof box);
         }
         st->entries[slot].seen = st->epoch;
         st->order[i] = (int)slot;
     }
+    sm = mk_bp_move_proxies(st->bp, &st->moves[0].proxy, sizeof *st->moves, &st->moves[0].box, sizeof *st->moves, nmoves,
+                            &done);
+    /* Proxies left behind by a failure keep their box: the records say so,
+     * and the next call moves them. */
+    for (k = done; k < nmoves; k++) mk_bp_get_proxy(st->bp, st->moves[k].proxy, &st->entries[st->moves[k].slot].fat, NULL);
+    if (s != MK_OK) return s;
+    if (sm != MK_OK) return sm;
     st->norder = (size_t)n;
     /* Every enumerated geom is live and seen, so live > n means some were not. */
     for (i = 0; st->live > n && i < st->nslots; i++)
