@@ -311,33 +311,36 @@ mk_feature mk_feature_at(const mk_shape *s, mk_vec3 p, mk_vec3 n)
  * length is then the side's length wherever the slop applies. */
 typedef struct side_plane { mk_vec3 n; mk_real d, slop; mk_feature id; } side_plane;
 
-/* An incident vertex up to this fraction of the reference side's length
- * (of the segment's, for a segment) outside a side plane is kept as it is instead of being replaced by the
- * crossings of its two edges with the plane. Equal boxes stacked square have
- * incident corners exactly on the side planes; without the slop round-off
- * decides, frame by frame, whether a corner is kept (vertex against face) or
- * clipped into two crossing points (edge against edge), and the feature IDs
- * flicker. With it they change only when the misalignment really crosses
- * 0.35 % of the side (0.5 % of a square's half diagonal). Crossings are always computed on the exact planes, so
- * clipped regions stay exact; only a vertex in the slop strip may lie that
- * little outside the reference face, which no solver notices. Only when the
- * clip direction is the face's own normal, though: along an axis tilted
- * against the face, a point outside it would be measured deeper than any
- * real point, and the deepest depth must stay exact. Nor when rounded cores
- * are apart: a vertex beside the face is then farther from it than its
- * height over the plane, and rounded shapes resting apart by their radii
- * (Bullet's margins) must get exact depths. */
-#define MK_MF_CLIP_SLOP MK_REAL(0.0035)
-
-static int side_planes(const mk_feat *ref, mk_vec3 n, int slop, side_plane *sp)
+/* An incident vertex up to m->slop of the reference side's length (of the
+ * segment's, for a segment) outside a side plane is kept as it is instead
+ * of being replaced by the crossings of its two edges with the plane.
+ * Equal boxes stacked square have incident corners exactly on the side
+ * planes; without a slop round-off decides, frame by frame, whether a
+ * corner is kept (vertex against face) or clipped into two crossing points
+ * (edge against edge), and the feature IDs flicker. MK_MANIFOLD_STABLE_IDS
+ * takes MK_MF_SLOP_IDS, 0.35 % of the side (0.5 % of a square's half
+ * diagonal): the IDs change only when the misalignment really crosses it,
+ * and equal boxes rocking by 0.1 degree keep them. MK_MANIFOLD_BEST_FACE
+ * takes MK_MF_SLOP_EXACT, round-off only: a corner really outside is
+ * clipped, as Bullet's box-box clips it; the wider strip kept corners up
+ * to 1.7 mm outside the face, and Bullet's solver, fed those points, let
+ * demos/bullet_scenes' 10-box tower drift twice as far as native.
+ * Crossings are always computed on the exact planes, so clipped regions
+ * stay exact. Only when the clip direction is the face's own normal,
+ * though: along an axis tilted against the face, a point outside it would
+ * be measured deeper than any real point, and the deepest depth must stay
+ * exact. Nor when rounded cores are apart: a vertex beside the face is then
+ * farther from it than its height over the plane, and rounded shapes
+ * resting apart by their radii (Bullet's margins) must get exact depths. */
+static int side_planes(const mk_feat *ref, mk_vec3 n, mk_real slop, side_plane *sp)
 {
     int i, count = ref->count;
     mk_vec3 c = mk_v3_zero();
-    slop = slop && (count == 2 || mk_fabs_(mk_v3_dot(n, ref->normal)) >= 1 - 64 * MK_REAL_EPSILON);
+    if (!(count == 2 || mk_fabs_(mk_v3_dot(n, ref->normal)) >= 1 - 64 * MK_REAL_EPSILON)) slop = 0;
     if (count == 2) {
         /* The two end planes of a segment, perpendicular to it within the contact plane. */
         mk_vec3 u = mk_v3_sub(ref->v[1], ref->v[0]);
-        mk_real width = slop ? MK_MF_CLIP_SLOP * mk_v3_len(u) : 0;
+        mk_real width = slop * mk_v3_len(u);
         u = mk_v3_normalize(mk_v3_mad(u, -mk_v3_dot(u, n), n));
         sp[0].n = mk_v3_neg(u);
         sp[0].d = -mk_v3_dot(u, ref->v[0]);
@@ -360,7 +363,7 @@ static int side_planes(const mk_feat *ref, mk_vec3 n, int slop, side_plane *sp)
         sp[i].n = sn;
         sp[i].d = mk_v3_dot(sn, a);
         sp[i].id = ref->eid[i];
-        sp[i].slop = slop ? MK_MF_CLIP_SLOP * mk_v3_len2(e) : 0;
+        sp[i].slop = slop * mk_v3_len2(e);
     }
     return count;
 }
@@ -500,7 +503,7 @@ void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, 
 {
     side_plane sp[MK_FEAT_MAX];
     clip_vert out[MK_MF_MAX];
-    int nsp = side_planes(ref, m->normal, !(m->cores_apart && ra + rb > 0), sp), n, i;
+    int nsp = side_planes(ref, m->normal, m->cores_apart && ra + rb > 0 ? 0 : m->slop, sp), n, i;
     mk_real inv_cos = ref->count > 2 ? 1 / mk_v3_dot(m->normal, ref->normal) : 0;
     if (inc->count == 1) {
         for (i = 0; i < nsp; ++i)
@@ -518,7 +521,7 @@ void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, 
  * the reference box's frame, where the reference face's side planes are
  * coordinate planes: a side test is one subtraction instead of a dot
  * product, and no polygon, side plane or centroid is built. The clipping
- * order, the slop (MK_MF_CLIP_SLOP times the side's length, as
+ * order, the slop (m->slop times the side's length, as
  * side_planes() sets it for a face), the naming of crossings and the
  * candidates' order are mk_mf_clip's, so the manifold and its feature IDs
  * are the same. */
@@ -599,7 +602,8 @@ void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_rea
     mk_vec3 h = ref->u.half_extents, g = inc->u.half_extents, n = m->normal, d, col[3], tri, c0, cu, cv;
     mk_real hh[3], gg[3], dd[3];
     box_vert buf[2][MK_MF_MAX];
-    int k = face / 2, fi, ia, iu, iv, i, q, cnt = 4, cur = 0, slop = !(m->cores_apart && ra + rb > 0);
+    int k = face / 2, fi, ia, iu, iv, i, q, cnt = 4, cur = 0;
+    mk_real slop = m->cores_apart && ra + rb > 0 ? 0 : m->slop;
     mk_real sgn = face & 1 ? 1 : -1;
     mk_feature finc_face;
     /* The incident box in the reference frame: x_ref = col * x_inc + tri,
@@ -637,10 +641,10 @@ void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_rea
         x->edge = E(box_face_edge[fi][i]);
     }
     /* The reference face's sides in its corner order; the slop is
-     * side_planes()' for a face, MK_MF_CLIP_SLOP times the side's length. */
+     * side_planes()' for a face, m->slop times the side's length. */
     for (q = 0; q < 4 && cnt > 0; ++q) {
         const signed char *sd = box_face_side[face][q];
-        int r = clip_box_side(face, q, finc_face, sd[1], sd[0], hh[sd[0]], slop ? 2 * MK_MF_CLIP_SLOP * hh[sd[2]] : 0, buf[cur], cnt,
+        int r = clip_box_side(face, q, finc_face, sd[1], sd[0], hh[sd[0]], 2 * slop * hh[sd[2]], buf[cur], cnt,
                               buf[cur ^ 1]);
         if (r >= 0) cnt = r, cur ^= 1;
     }

@@ -183,7 +183,8 @@ static mk_status shape_plane(const mk_pair *p, mk_mf *m, mk_manifold_cache *cach
 }
 
 #ifndef MK_WITHOUT_SAT
-/* Face/edge hysteresis of box pairs (mk_sat_options.prefer): last frame's
+/* Face/edge hysteresis of box pairs (mk_sat_options.prefer): with
+ * MK_MANIFOLD_STABLE_IDS last frame's
  * kind of face axis (face of A, face of B) is kept while its separation is
  * within 5 % of the best one's plus 0.5 % of the smaller box's smallest half
  * extent, and an edge pair must beat the face by as much (half as much when
@@ -348,8 +349,9 @@ static int polytopes_apart(const mk_shape *a, mk_vec3 pa, const mk_shape *b, mk_
 /* Two polytopes (boxes, hulls): SAT (src/sat.h; the 15-axis closed form for
  * two boxes), then a face axis clips the incident face against the
  * reference face and an edge axis gives the closest points of the two
- * edges. Cold (no cache) the exact best axis is used; warm, the kind of last
- * frame's axis is preferred within the hysteresis band. */
+ * edges. Cold (no cache) the exact best axis is used; warm, faces are
+ * preferred to edge pairs within the hysteresis band, and with
+ * MK_MANIFOLD_STABLE_IDS last frame's face kind too. */
 static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 {
     const mk_shape *a = p->a, *b = p->b;
@@ -369,6 +371,7 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     }
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
     opt.prefer_rel = MK_SAT_PREFER_REL;
+    opt.hold_face = !cache || cache->mode == MK_MANIFOLD_STABLE_IDS;
     mk_box_hull va, vb;
     const mk_hull *ha = a->u.hull, *hb = b->u.hull;
     int boxes = a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX;
@@ -526,6 +529,7 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     if ((st = check_transform(xa)) != MK_OK || (st = check_transform(xb)) != MK_OK) return st;
     if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
     if (margin < 0) return MK_ERR_BAD_ARGUMENT;
+    if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
     fn = pair_table(a->type, b->type);
     if (!fn) {
         fn = pair_table(b->type, a->type);
@@ -548,6 +552,7 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     m.count = 0;
     m.margin = margin;
     m.cores_apart = 0;
+    m.slop = cache && cache->mode == MK_MANIFOLD_BEST_FACE ? MK_MF_SLOP_EXACT : MK_MF_SLOP_IDS;
     m.normal = mk_v3(0, 0, 1);
     if ((st = fn(&p, &m, cache)) != MK_OK) return st;
     mk_mf_reduce(&m);

@@ -25,6 +25,11 @@
  * is measured on its own. See the report in manifold.c for the choice. */
 #define MK_MF_SIN_TOL MK_REAL(0.01)
 
+/* The clip slop of each mk_manifold_mode (clip.c says why): the stable
+ * IDs' 0.35 % of the reference side, or round-off only. */
+#define MK_MF_SLOP_IDS MK_REAL(0.0035)
+#define MK_MF_SLOP_EXACT (64 * MK_REAL_EPSILON)
+
 /* A support feature of a core, in some frame. count 1: a point; 2: a
  * segment; >= 3: a convex polygon with outward unit `normal`. eid[i] names
  * the edge v[i] -> v[i + 1]. `exact` is 0 for polygons that sample a curved
@@ -50,6 +55,7 @@ typedef struct mk_mf {
     mk_vec3 normal;   /* unit, from A towards B */
     mk_real margin;   /* candidates with depth < -margin are dropped */
     int cores_apart;  /* set before clipping: rounded cores apart clip without slop (clip.c) */
+    mk_real slop;     /* clip slop, a fraction of the reference side: MK_MF_SLOP_IDS or MK_MF_SLOP_EXACT */
     int count;
     mk_mf_point p[MK_MF_MAX];
 } mk_mf;

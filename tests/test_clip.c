@@ -2,7 +2,8 @@
  * polygon clip (mk_mf_clip on mk_box_face polygons) it specialises: the same
  * candidates, in the same order, with the same feature IDs, positions and
  * depths, on random poses, stacked boxes (corners on the side planes, where
- * the slop decides) and rounded boxes apart. */
+ * the slop decides) and rounded boxes apart, with the clip slop of either
+ * mk_manifold_mode. */
 #include <string.h>
 
 #include "gjk.h"
@@ -18,11 +19,12 @@
 /* Check records a checkpoint on every passing ck_assert; loops test first. */
 #define REQUIRE(cond, ...) do { if (!(cond)) ck_abort_msg(__VA_ARGS__); } while (0)
 
-static void mf_init(mk_mf *m, mk_vec3 n, mk_real margin, int apart)
+static void mf_init(mk_mf *m, mk_vec3 n, mk_real margin, int apart, mk_real slop)
 {
     m->count = 0;
     m->margin = margin;
     m->cores_apart = apart;
+    m->slop = slop;
     m->normal = n;
 }
 
@@ -45,7 +47,7 @@ static void general(const mk_pair *p, int ref_is_a, int face, mk_mf *m)
 }
 
 /* Compares the two clips of one pose and reference; returns the candidate count. */
-static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int apart, int c)
+static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int apart, mk_real slop, int c)
 {
     mk_mf g, b;
     mk_vec3 n;
@@ -60,8 +62,8 @@ static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int
         mk_vec3 col = face / 2 == 0 ? p->r.c0 : face / 2 == 1 ? p->r.c1 : p->r.c2;
         n = face & 1 ? mk_v3_neg(col) : col; /* B's outward face normal, negated: from A towards B */
     }
-    mf_init(&g, n, margin, apart);
-    mf_init(&b, n, margin, apart);
+    mf_init(&g, n, margin, apart, slop);
+    mf_init(&b, n, margin, apart, slop);
     general(p, ref_is_a, face, &g);
     mk_mf_clip_boxes(&b, p, ref_is_a, face, p->a->radius, p->b->radius);
     REQUIRE(g.count == b.count, "case %d: %d candidates, general clip %d", c, b.count, g.count);
@@ -70,8 +72,22 @@ static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int
                 g.p[i].features);
         REQUIRE(mk_fabs_(g.p[i].depth - b.p[i].depth) <= TOL * scale, "case %d point %d: depth %.17g, general %.17g", c, i,
                 (double)b.p[i].depth, (double)g.p[i].depth);
-        REQUIRE(mk_v3_dist(g.p[i].pa, b.p[i].pa) <= TOL * scale, "case %d point %d: point off by %g", c, i,
-                (double)mk_v3_dist(g.p[i].pa, b.p[i].pa));
+        /* A crossing of an incident edge nearly parallel to the side plane
+         * it crosses (square stacks, whose corners the round-off slop
+         * leaves outside) is ill-conditioned along that plane: the two
+         * clips' round-off in the plane distances moves it by
+         * eps |edge| / |da - db|. Both must put it on the same side plane
+         * (one in-face coordinate of the reference box) and at the same
+         * depth; along the plane it may differ. */
+        {
+            mk_vec3 d = mk_v3_sub(g.p[i].pa, b.p[i].pa);
+            mk_real e[3];
+            int k = face / 2;
+            if (!ref_is_a) d = mk_mat3_tmul_v3(p->r, d);
+            e[0] = mk_fabs_(d.x), e[1] = mk_fabs_(d.y), e[2] = mk_fabs_(d.z);
+            REQUIRE(mk_v3_len(d) <= TOL * scale || (e[k] <= TOL * scale && mk_min(e[(k + 1) % 3], e[(k + 2) % 3]) <= TOL * scale),
+                    "case %d point %d: point off by %g", c, i, (double)mk_v3_len(d));
+        }
     }
     return g.count;
 }
@@ -114,7 +130,8 @@ START_TEST(box_clip_matches_general_clip)
             int axis = ad.x >= ad.y && ad.x >= ad.z ? 0 : ad.y >= ad.z ? 1 : 2;
             face = 2 * axis + ((axis == 0 ? d.x : axis == 1 ? d.y : d.z) >= 0);
         }
-        n = compare(&p, ref_is_a, face, margin, rad > 0 && c % 2, c);
+        /* Both modes' slops (minko/manifold.h), on alternate cases. */
+        n = compare(&p, ref_is_a, face, margin, rad > 0 && c % 2, (c / 6) % 2 ? MK_MF_SLOP_EXACT : MK_MF_SLOP_IDS, c);
         total += n > 0;
         many += n > 4;
     }

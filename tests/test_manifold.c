@@ -816,6 +816,108 @@ START_TEST(ids_stable_box_on_box)
 END_TEST
 
 
+/* MK_MANIFOLD_BEST_FACE on a rocking stack of equal boxes, offset by up to
+ * 2 mm so that either face can be the better one: every
+ * warm frame reports the minimum-penetration face (A's top or B's bottom,
+ * whichever penetrates less: the better separating axis), with that face's
+ * exact normal and depth, so the face swaps with the sign of the tilt
+ * where the default mode holds A's. */
+START_TEST(best_face_mode_on_tilted_stack)
+{
+    mk_shape a, b;
+    mk_manifold m;
+    mk_manifold_cache cache, held;
+    mk_rng r = {17};
+    int f, on_a = 0, on_b = 0, prev = 0, swaps = 0;
+    mk_shape_box(mk_v3(0.35, 0.35, 0.15), 0, &a);
+    b = a;
+    memset(&cache, 0, sizeof cache);
+    memset(&held, 0, sizeof held);
+    cache.mode = MK_MANIFOLD_BEST_FACE;
+    for (f = 0; f < 300; ++f) {
+        mk_vec3 axis = mk_v3((mk_real)mk_rng_range(&r, -1, 1), (mk_real)mk_rng_range(&r, -1, 1), 0);
+        double off = 2e-3 * mk_rng_range(&r, -1, 1), tilt = f == 0 ? 0 : 2e-3 * mk_rng_range(&r, -1, 1);
+        mk_transform xb = turned(mk_v3((mk_real)off, 0, (mk_real)0.299), axis, tilt);
+        mk_mat3 R = mk_mat3_from_quat(xb.q);
+        mk_vec3 nb = R.c2; /* B's bottom face normal (-R.c2), negated: from A towards B */
+        /* Penetration along A's z and along B's z, from the boxes' extents. */
+        double ext_b = 0.35 * fabs((double)R.c0.z) + 0.35 * fabs((double)R.c1.z) + 0.15 * fabs((double)R.c2.z);
+        double ext_a = 0.35 * fabs((double)R.c2.x) + 0.35 * fabs((double)R.c2.y) + 0.15 * fabs((double)R.c2.z);
+        double pen_a = 0.15 + ext_b - (double)xb.p.z, pen_b = 0.15 + ext_a - fabs((double)mk_v3_dot(xb.p, R.c2));
+        int face_a;
+        MK_ASSERT_STATUS(mk_collide(&a, at(0, 0, 0), &b, xb, 0, &cache, &m), MK_OK);
+        check_invariants(&m, at(0, 0, 0), xb, 0, 1e-9 + 4 * TOL);
+        ck_assert_int_eq(m.count, 4);
+        ck_assert_int_eq(cache.mode, MK_MANIFOLD_BEST_FACE); /* the host's choice is never overwritten */
+        face_a = m.normal.x == 0 && m.normal.y == 0 && m.normal.z == 1;
+        ck_assert_msg(face_a || mk_v3_dist(m.normal, nb) <= 4 * TOL, "frame %d: normal not a face normal", f);
+        if (fabs(pen_a - pen_b) > 64 * TOL) {
+            ck_assert_msg(face_a == (pen_a < pen_b), "frame %d: face of %s taken, penetrations A %.17g B %.17g", f, face_a ? "A" : "B",
+                          pen_a, pen_b);
+            /* The deepest corner may overhang the other face by the offset
+             * and be clipped: the deepest point is then short of the face's
+             * penetration by up to the tilt times the offset. */
+            double pen = face_a ? pen_a : pen_b;
+            ck_assert_msg(max_depth(&m) <= pen + 4 * TOL && max_depth(&m) >= pen - fabs(off * tilt) - 4 * TOL,
+                          "frame %d: depth %.17g, face penetration %.17g", f, (double)max_depth(&m), pen);
+        }
+        /* The default mode on the same frames holds A's face (frame 0, square, ties to it). */
+        MK_ASSERT_STATUS(mk_collide(&a, at(0, 0, 0), &b, xb, 0, &held, &m), MK_OK);
+        MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, 1), f == 0 ? 4 * TOL : 0);
+        on_a += face_a;
+        on_b += !face_a;
+        if (f > 0 && face_a != prev) swaps++;
+        prev = face_a;
+    }
+    ck_assert_int_gt(on_a, 50);
+    ck_assert_int_gt(on_b, 50);
+    ck_assert_int_gt(swaps, 10);
+}
+END_TEST
+
+/* The clip slop of the two modes: a box overhanging a larger one's edge by
+ * 1 mm (0.05 % of the 2 m side) keeps its corners there by default (within
+ * the 0.35 % strip, so the IDs do not flicker), and has them clipped to the
+ * face with MK_MANIFOLD_BEST_FACE. */
+START_TEST(mode_clip_slop)
+{
+    mk_shape a, b;
+    mk_manifold_cache cache;
+    mk_manifold m;
+    mk_transform xb = at((mk_real)0.501, 0, (mk_real)0.749);
+    int mode, i;
+    mk_shape_box(mk_v3(1, 1, 0.5), 0, &a);
+    mk_shape_box(mk_v3(0.5, 0.5, 0.25), 0, &b);
+    for (mode = 0; mode < 2; ++mode) {
+        mk_real xmax = -1;
+        int corners = 0;
+        memset(&cache, 0, sizeof cache);
+        cache.mode = mode ? MK_MANIFOLD_BEST_FACE : MK_MANIFOLD_STABLE_IDS;
+        MK_ASSERT_STATUS(mk_collide(&a, at(0, 0, 0), &b, xb, 0, &cache, &m), MK_OK);
+        check_invariants(&m, at(0, 0, 0), xb, 0, 1e-9 + 4 * TOL);
+        ck_assert_int_eq(m.count, 4);
+        MK_ASSERT_V3_NEAR(m.normal, mk_v3(0, 0, 1), 4 * TOL);
+        for (i = 0; i < 4; ++i) {
+            xmax = mk_max(xmax, m.points[i].point_a.x);
+            corners += MK_FEATURE_TYPE(MK_FEATURE_PAIR_B(m.points[i].features)) == MK_FEATURE_VERTEX &&
+                       MK_FEATURE_PAIR_A(m.points[i].features) == MK_FEATURE(MK_FEATURE_FACE, 5);
+            MK_ASSERT_NEAR(m.points[i].depth, 0.001, 4 * TOL);
+        }
+        if (mode == 0) {
+            MK_ASSERT_NEAR(xmax, 1.001, 4 * TOL);
+            ck_assert_int_eq(corners, 4);
+        } else {
+            MK_ASSERT_NEAR(xmax, 1, 4 * TOL);
+            ck_assert_int_eq(corners, 2);
+        }
+    }
+    /* An unknown mode is refused. */
+    memset(&cache, 0, sizeof cache);
+    cache.mode = (mk_manifold_mode)7;
+    MK_ASSERT_STATUS(mk_collide(&a, at(0, 0, 0), &b, xb, 0, &cache, &m), MK_ERR_BAD_ARGUMENT);
+}
+END_TEST
+
 /* ---- hulls ---------------------------------------------------------------- */
 
 static mk_hull *make_hull(const mk_vec3 *pts, int n)
@@ -1213,6 +1315,8 @@ static Suite *manifold_suite(void)
     tcase_add_test(tc, ids_stable_box_sliding_on_plane);
     tcase_add_test(tc, seed000_id_matching_beats_distance);
     tcase_add_test(tc, ids_stable_box_on_box);
+    tcase_add_test(tc, best_face_mode_on_tilted_stack);
+    tcase_add_test(tc, mode_clip_slop);
     tcase_add_test(tc, hysteresis_box_on_edge);
     tcase_add_test(tc, tilted_stack_keeps_face_contact);
     suite_add_tcase(s, tc);

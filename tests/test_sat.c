@@ -622,6 +622,65 @@ START_TEST(first_axis_hint)
 }
 END_TEST
 
+/* hold_face = 0 (MK_MANIFOLD_BEST_FACE): the better face wins whichever
+ * face kind is preferred, however wide the band; edge pairs still need to
+ * beat it by the band. Hulls through mk_sat, boxes through mk_sat_box_box. */
+START_TEST(better_face_not_held)
+{
+    mk_rng r = {27};
+    int i, faces = 0, edges = 0;
+    for (i = 0; i < 400; ++i) {
+        int box = i % 2;
+        mk_vec3 hx[2];
+        mk_hull *ha = NULL, *hb = NULL;
+        mk_box_hull A, B;
+        const mk_hull *a, *b;
+        mk_mat3 R = mk_mat3_from_quat(mk_rng_quat(&r));
+        mk_vec3 t = mk_v3_scale(mk_rng_dir(&r), (mk_real)mk_rng_range(&r, 0, 0.6));
+        mk_sat_options o = mk_sat_defaults();
+        mk_sat_result base, warm;
+        mk_sat_kind k;
+        if (box) {
+            hx[0] = mk_rng_v3(&r, 0.2, 1);
+            hx[1] = mk_rng_v3(&r, 0.2, 1);
+            mk_box_hull_init(&A, hx[0]);
+            mk_box_hull_init(&B, hx[1]);
+            a = &A.hull;
+            b = &B.hull;
+        } else {
+            a = ha = ellipsoid_hull(&r, 12, mk_rng_v3(&r, 0.3, 1));
+            b = hb = ellipsoid_hull(&r, 12, mk_rng_v3(&r, 0.3, 1));
+        }
+        hinted(a, b, box ? hx : NULL, &R, t, &base, &o);
+        o.hold_face = 0;
+        o.prefer_abs = (mk_real)1e9;
+        for (k = MK_SAT_FACE_A; k <= MK_SAT_EDGES; ++k) {
+            o.prefer = k;
+            hinted(a, b, box ? hx : NULL, &R, t, &warm, &o);
+            REQUIRE(warm.best == base.best, "case %d: the depth changed", i);
+            REQUIRE(warm.kind != MK_SAT_EDGES, "case %d: an edge pair beat a face by 1e9", i);
+            if (base.kind != MK_SAT_EDGES) {
+                REQUIRE(warm.kind == base.kind && warm.a == base.a && warm.b == base.b && warm.separation == base.separation,
+                        "case %d: the face kind was held against the better face", i);
+                faces += k != base.kind;
+            } else {
+                /* The better of the two faces, the same whatever the preference. */
+                mk_sat_options c = o;
+                mk_sat_result other;
+                c.prefer = k == MK_SAT_FACE_A ? MK_SAT_FACE_B : MK_SAT_FACE_A;
+                hinted(a, b, box ? hx : NULL, &R, t, &other, &c);
+                REQUIRE(other.kind == warm.kind && other.separation == warm.separation, "case %d: the face depends on the preference", i);
+                edges += k == MK_SAT_FACE_A;
+            }
+        }
+        if (ha) mk_hull_destroy(ha);
+        if (hb) mk_hull_destroy(hb);
+    }
+    ck_assert_int_gt(faces, 200);
+    ck_assert_int_gt(edges, 10);
+}
+END_TEST
+
 static Suite *sat_suite(void)
 {
     Suite *s = suite_create("sat");
@@ -636,6 +695,7 @@ static Suite *sat_suite(void)
     tcase_add_test(tc, early_stop);
     tcase_add_test(tc, hysteresis);
     tcase_add_test(tc, first_axis_hint);
+    tcase_add_test(tc, better_face_not_held);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -16,17 +16,32 @@
  * (minko/contact_cache.h). An optional caller-owned mk_manifold_cache per
  * pair (zero-initialised = cold) carries the previous frame's choices: for
  * boxes and hulls the kind of separating axis (face of A, face of B, edge
- * pair), a face kind kept while it stays within a band of 5 % of the depth
- * plus 0.5 % of the smaller shape's size of the better face, and faces
- * preferred: an edge pair is taken warm only when it beats the face by that
- * band (by half of it when last frame was an edge pair), as ODE's dBoxBox
- * and Box2D favour faces; for the other pairs the reference face, kept
- * while it faces the normal within the tolerance, plus the GJK simplex. A
- * rocking stack thus keeps its normal, its four points and its feature IDs;
- * the price is that warm frames may report the kept axis's depth instead of
- * the minimum, deeper by at most that band. A cold call (no cache, or a new
- * contact) is exact. Bad input (NULL, NaN/Inf, non-unit rotations,
- * invalid shapes, a negative margin) returns a status and leaves *out
+ * pair), with faces preferred: an edge pair is taken warm only when it
+ * beats the face by a band of 5 % of the depth plus 0.5 % of the smaller
+ * shape's size (by half of it when last frame was an edge pair), as ODE's
+ * dBoxBox and Box2D favour faces; for the other pairs the reference face,
+ * kept while it faces the normal within the tolerance, plus the GJK
+ * simplex. The cache's `mode`, set by the host and never written by
+ * mk_collide, chooses what else a warm frame favours. MK_MANIFOLD_STABLE_IDS
+ * (0, the default) promises stable feature IDs: a box or hull pair keeps
+ * last frame's face kind (A's or B's face) while it stays within that band
+ * of the better face, and an incident vertex up to 0.35 % of the side
+ * outside the reference face is kept, not clipped, so a rocking stack of
+ * equal boxes keeps its normal, its four points and its IDs; the price is
+ * that warm frames may report the kept face's depth and normal instead of
+ * the minimum (deeper by at most the band, tilted by the boxes' relative
+ * tilt) and points up to that strip outside the face. Hosts that match
+ * warm-start impulses by feature ID alone (minko/contact_cache.h,
+ * demos/solver_demo) need it. MK_MANIFOLD_BEST_FACE promises the
+ * minimum-penetration face: the better face (ties to A's) wins every frame
+ * and its exact normal is reported, and incident vertices outside the
+ * reference face are clipped beyond round-off (64 ulps of the side); equal
+ * boxes stacked and rocking then swap the reference face between them as
+ * the tilt changes sign, and every feature ID with it. Hosts whose solver
+ * is sensitive to the normal's tilt and can match contacts by position too
+ * (Bullet's persistent manifold) should pick it. A cold call (no cache, or a new
+ * contact) is exact in both modes. Bad input (NULL, NaN/Inf, non-unit rotations,
+ * invalid shapes, a negative margin, an unknown cache mode) returns a status and leaves *out
  * untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing allocates;
  * every query runs in A's local frame. Methods: closed forms for sphere,
  * capsule and box-capsule pairs and for anything against a plane; SAT
@@ -109,15 +124,23 @@ typedef struct mk_manifold {
     mk_contact_point points[MK_MANIFOLD_MAX_POINTS];
 } mk_manifold;
 
+/* mk_manifold_cache.mode: what a warm frame favours (see the contract). */
+typedef enum mk_manifold_mode {
+    MK_MANIFOLD_STABLE_IDS = 0, /* stable feature IDs for ID-only warm starting (default) */
+    MK_MANIFOLD_BEST_FACE = 1   /* the minimum-penetration face every frame, points clipped to it */
+} mk_manifold_mode;
+
 /* Per-pair state carried from one frame to the next. Zero it (or pass NULL)
- * for a cold start; keep one per body pair and pass the shapes in the same
- * order every frame. */
+ * for a cold start, then set `mode` if the default does not suit; keep one
+ * per body pair and pass the shapes in the same order every frame. To
+ * restart a pair cold, zero it and set the mode again. */
 typedef struct mk_manifold_cache {
     mk_gjk_cache gjk;   /* GJK warm start of pairs without a closed form */
     int reference;      /* internal: 1 / 2 when the last manifold was clipped against a face of A / B */
     mk_feature face;    /* internal: that face */
     int axis;           /* internal: kind of the last SAT axis of a box or hull pair, 0 = none; for a pair
                          * that was apart, its separating axis (with reference and face) */
+    mk_manifold_mode mode; /* set by the host, read only by mk_collide */
 } mk_manifold_cache;
 
 /* The contact manifold of shapes a (pose xa) and b (pose xb). `margin` >= 0:
