@@ -25,6 +25,13 @@ typedef struct sat_ctx {
     mk_real stop;
     sat_axis face_a, face_b, edges;
     int stopped;
+    /* Pruning (hulls only; see prune_init): the largest separation offered
+     * so far, the centroids of A and B in A's frame, the radii of balls
+     * about them inside each core less the rounding slack, and the band of
+     * the options' hysteresis. */
+    mk_real lo, rel, abs_band;
+    mk_vec3 ca, cb, ca_in_b; /* A's centroid, B's (in A's frame), A's in B's frame */
+    mk_real ra, rb;
 } sat_ctx;
 
 mk_sat_options mk_sat_defaults(void)
@@ -50,6 +57,7 @@ static void axis_none(sat_axis *x)
 /* Keeps x if it beats the best of its kind; notes when it separates enough to stop. */
 static void offer(sat_ctx *c, sat_axis *best, mk_real sep, int ia, int ib, mk_vec3 n)
 {
+    if (sep > c->lo) c->lo = sep;
     if (!(sep > best->sep)) return;
     best->sep = sep;
     best->a = ia;
@@ -68,23 +76,132 @@ static void face_of_a(sat_ctx *c, int i, int *hint)
     offer(c, &c->face_a, mk_v3_dot(pl.normal, w) - pl.offset, i, -1, pl.normal);
 }
 
+/* One edge, ready for the Gauss-map test: a point, the edge vector, the
+ * normals of its two faces (the face of the half-edge first) and the rounding
+ * scale of its sign tests, all in A's frame. */
+typedef struct sat_edge {
+    mk_vec3 p, e, n1, n2;
+    mk_real tol;
+    int index;
+} sat_edge;
+
+/* ---- pruning ------------------------------------------------------------------
+ * An axis can change mk_sat's answer only if it separates by at least
+ * prune_floor = lo - band(lo), lo the largest separation offered so far: the
+ * answer's best is >= lo, and an axis below best - band(best) (band =
+ * prefer_rel |best| + prefer_abs, zero without a preference; best - band is
+ * increasing in best while prefer_rel < 1) is neither the best nor within
+ * the hysteresis band of it, so finish() picks the same axis with or without
+ * it, index included (a skipped axis is strictly below the floor, so it
+ * never ties). Cheap upper bounds on the separation along one face, or
+ * along every axis an edge of B takes part in, then skip most support
+ * queries and Gauss-map walks of a penetrating pair. The bounds come from
+ * balls inside the cores: along any unit n, min_B n.x <= n.c_B - r_B and
+ * max_A n.x >= n.c_A + r_A, c the centroid, r the inner radius, less a slack
+ * for rounding and for the construction tolerance (vertices lie within a
+ * few tol of their planes). */
+static mk_real prune_floor(const sat_ctx *c)
+{
+    return c->lo > -MK_REAL_MAX ? c->lo - (c->rel * mk_fabs_(c->lo) + c->abs_band) : -MK_REAL_MAX;
+}
+
+static void prune_init(sat_ctx *c, const mk_sat_options *opt)
+{
+    const mk_hull *a = c->a, *b = c->b;
+    mk_real scale = mk_v3_len(c->t) + mk_v3_len(a->centroid) + mk_v3_len(b->centroid) + a->outer_radius + b->outer_radius;
+    mk_real slack = MK_REAL(1024.0) * MK_REAL_EPSILON * scale + 8 * (a->tolerance + b->tolerance);
+    int banded = opt->prefer != MK_SAT_NONE;
+    c->lo = -MK_REAL_MAX;
+    c->ca = a->centroid;
+    c->cb = mk_v3_add(mk_mat3_mul_v3(c->R, b->centroid), c->t);
+    c->ca_in_b = mk_mat3_tmul_v3(c->R, mk_v3_sub(c->ca, c->t));
+    c->ra = a->inner_radius - slack;
+    c->rb = b->inner_radius - slack;
+    c->rel = banded ? opt->prefer_rel : 0;
+    c->abs_band = banded ? opt->prefer_abs : 0;
+    /* A band this wide (or not a number) prunes nothing: radii of -max make
+     * every bound +max (and skip the seed). */
+    if (!(c->rel < 1) || !(c->abs_band < MK_REAL_MAX)) c->ra = c->rb = -MK_REAL_MAX;
+}
+
+/* Is A's face i below the floor? min_B n.x - d <= n.c_B - r_B - d. */
+static int face_a_pruned(const sat_ctx *c, int i)
+{
+    const mk_plane *pl = &c->a->planes[i];
+    return mk_v3_dot(pl->normal, c->cb) - pl->offset - c->rb < prune_floor(c);
+}
+
+/* Is B's face f below the floor? The separation along its normal m (A's
+ * frame) negated is min_A m.x - (m.t + d) <= m.(c_A - t) - r_A - d, which
+ * is the same in B's frame: no rotation for a face that is skipped. */
+static int face_b_pruned(const sat_ctx *c, int f)
+{
+    const mk_plane *pl = &c->b->planes[f];
+    return mk_v3_dot(pl->normal, c->ca_in_b) - pl->offset - c->ra < prune_floor(c);
+}
+
+/* Are all the axes of B's half-edge j below the floor? Each is a unit n
+ * with the edge B's support edge along -n, so min_B n.x = n.q (q on the
+ * edge) and the separation is at most n.(q - c_A) - r_A; n lies on the arc
+ * from u = -n1 to v = -n2 (the edge's face normals), where n.D for
+ * D = q - c_A is at most max(u.D, v.D) when that is negative, else that
+ * over cos(theta / 2), theta the arc's angle, cos^2(theta / 2) =
+ * (1 + u.v) / 2, and never more than |D|. All of it in B's frame (dot
+ * products do not see the rotation), so a skipped edge costs no transform.
+ * An axis the Gauss-map test cannot call (parallel features) can lie off
+ * the arc by the test's tolerance, a few hundred eps of |D|, which the
+ * slack covers. */
+static int edge_b_pruned(const sat_ctx *c, int j)
+{
+    const mk_hull *b = c->b;
+    const mk_hull_edge *E = &b->edges[j];
+    mk_vec3 n1 = b->planes[E->face].normal, n2 = b->planes[b->edges[E->twin].face].normal;
+    mk_vec3 D = mk_v3_sub(b->vertices[E->origin], c->ca_in_b);
+    mk_real m = -mk_min(mk_v3_dot(n1, D), mk_v3_dot(n2, D)), floor = prune_floor(c) + c->ra;
+    if (!(floor > -MK_REAL_MAX)) return 0;
+    if (m < 0) return m < floor;
+    if (!(floor > 0)) return 0;
+    /* m / cos(theta / 2) < floor, squared; or |D| < floor */
+    return m * m < floor * floor * (1 + mk_v3_dot(n1, n2)) * MK_REAL(0.5) || mk_v3_len2(D) < floor * floor;
+}
+
+/* A seed for lo on a cold call: the separations along the face of A that
+ * faces B's centroid most and the face of B that faces A's most. Both are
+ * axes mk_sat tests anyway (so lo stays <= best); they are measured, not
+ * offered, so the search below still finds every axis in its usual order. */
+static void prune_seed(sat_ctx *c)
+{
+    const mk_hull *a = c->a, *b = c->b;
+    mk_vec3 d = mk_v3_sub(c->cb, c->ca), db = mk_mat3_tmul_v3(c->R, mk_v3_neg(d)), w, m;
+    int i, fa = 0, fb = 0, v;
+    mk_real best_a = -MK_REAL_MAX, best_b = -MK_REAL_MAX, s;
+    for (i = 0; i < a->face_count; ++i)
+        if ((s = mk_v3_dot(a->planes[i].normal, d)) > best_a) best_a = s, fa = i;
+    for (i = 0; i < b->face_count; ++i)
+        if ((s = mk_v3_dot(b->planes[i].normal, db)) > best_b) best_b = s, fb = i;
+    v = mk_hull_support_index(b, mk_mat3_tmul_v3(c->R, mk_v3_neg(a->planes[fa].normal)), -1);
+    w = mk_v3_add(mk_mat3_mul_v3(c->R, b->vertices[v]), c->t);
+    s = mk_v3_dot(a->planes[fa].normal, w) - a->planes[fa].offset;
+    m = mk_mat3_mul_v3(c->R, b->planes[fb].normal);
+    v = mk_hull_support_index(a, mk_v3_neg(m), -1);
+    c->lo = mk_max(s, mk_v3_dot(m, mk_v3_sub(a->vertices[v], c->t)) - b->planes[fb].offset);
+}
+
 /* Separation along A's face normals. Consecutive faces' answers are close,
  * so each support query starts from the last one. */
 static void faces_of_a(sat_ctx *c)
 {
     int i, hint = -1;
-    for (i = 0; i < c->a->face_count && !c->stopped; ++i) face_of_a(c, i, &hint);
+    for (i = 0; i < c->a->face_count && !c->stopped; ++i)
+        if (!face_a_pruned(c, i)) face_of_a(c, i, &hint);
 }
 
 /* Separation along B's face f (normal m in A's frame): the deepest vertex
  * of A under it, searched from *hint, which is then that vertex. */
-static void face_of_b(sat_ctx *c, int f, int *hint, mk_vec3 *m)
+static void face_of_b(sat_ctx *c, int f, mk_vec3 m, int *hint)
 {
-    mk_plane pl = c->b->planes[f];
-    int u;
-    *m = mk_mat3_mul_v3(c->R, pl.normal);
-    u = *hint = mk_hull_support_index(c->a, mk_v3_neg(*m), *hint);
-    offer(c, &c->face_b, mk_v3_dot(*m, mk_v3_sub(c->a->vertices[u], c->t)) - pl.offset, -1, f, mk_v3_neg(*m));
+    int u = *hint = mk_hull_support_index(c->a, mk_v3_neg(m), *hint);
+    offer(c, &c->face_b, mk_v3_dot(m, mk_v3_sub(c->a->vertices[u], c->t)) - c->b->planes[f].offset, -1, f, mk_v3_neg(m));
 }
 
 /* Separation of the cores along the unit axis n, from the support points:
@@ -134,15 +251,6 @@ static int edge_axis(mk_vec3 p0, mk_vec3 ea, mk_vec3 na, mk_vec3 nb, mk_vec3 q0,
     *sep = mk_v3_dot(*n, mk_v3_sub(foot, p0));
     return 1;
 }
-
-/* One edge, ready for the Gauss-map test: a point, the edge vector, the
- * normals of its two faces (the face of the half-edge first) and the rounding
- * scale of its sign tests, all in A's frame. */
-typedef struct sat_edge {
-    mk_vec3 p, e, n1, n2;
-    mk_real tol;
-    int index;
-} sat_edge;
 
 static void prepare_edge(const mk_hull *h, int i, sat_edge *x)
 {
@@ -248,20 +356,25 @@ static void edge_of_b(const sat_ctx *c, int j, mk_vec3 n1, sat_edge *eb)
 
 /* B's faces, then B's edges face by face: the support of A along -n_f that
  * measures the separation along B's face f is also where the Gauss-map walk
- * of each of f's edges starts (their arcs begin at -n_f). */
+ * of each of f's edges starts (their arcs begin at -n_f); it is found only
+ * when the face or one of its edges is above the pruning floor. */
 static void faces_and_edges_of_b(sat_ctx *c)
 {
     const mk_hull *b = c->b;
     int f, hint = -1;
     for (f = 0; f < b->face_count && !c->stopped; ++f) {
-        mk_vec3 m;
-        int j0 = b->face_edge[f], j = j0, u;
-        face_of_b(c, f, &hint, &m);
-        u = hint;
+        mk_vec3 m = mk_mat3_mul_v3(c->R, b->planes[f].normal);
+        int j0 = b->face_edge[f], j = j0, u = -1;
+        if (!face_b_pruned(c, f)) {
+            face_of_b(c, f, m, &hint);
+            u = hint;
+        }
         do {
-            if (b->edges[j].twin > j && !c->stopped) { /* each edge once, from the face of its lower half-edge */
+            /* each edge once, from the face of its lower half-edge */
+            if (b->edges[j].twin > j && !c->stopped && !edge_b_pruned(c, j)) {
                 sat_edge eb;
                 edge_of_b(c, j, m, &eb);
+                if (u < 0) u = hint = mk_hull_support_index(c->a, mk_v3_neg(m), hint);
                 if (!walk(c, &eb, u)) scan(c, &eb);
             }
             j = b->edges[j].next;
@@ -275,6 +388,7 @@ static void ctx_init(sat_ctx *c, const mk_mat3 *R, mk_vec3 t, const mk_sat_optio
     c->t = t;
     c->stop = opt->stop_above;
     c->stopped = 0;
+    c->lo = -MK_REAL_MAX;
     axis_none(&c->face_a);
     axis_none(&c->face_b);
     axis_none(&c->edges);
@@ -327,7 +441,7 @@ static int first_axis(sat_ctx *c, const mk_sat_options *opt)
     if (opt->first == MK_SAT_FACE_A && opt->first_a >= 0 && opt->first_a < a->face_count) {
         face_of_a(c, opt->first_a, &hint);
     } else if (opt->first == MK_SAT_FACE_B && opt->first_b >= 0 && opt->first_b < b->face_count) {
-        face_of_b(c, opt->first_b, &hint, &m);
+        face_of_b(c, opt->first_b, mk_mat3_mul_v3(c->R, b->planes[opt->first_b].normal), &hint);
     } else if (opt->first == MK_SAT_EDGES && opt->first_a >= 0 && opt->first_a < a->edge_count && opt->first_b >= 0 &&
                opt->first_b < b->edge_count) {
         sat_edge ea, eb;
@@ -338,7 +452,11 @@ static int first_axis(sat_ctx *c, const mk_sat_options *opt)
         if (edge_axis(ea.p, ea.e, ea.n1, ea.n2, eb.p, eb.e, &m, &sep)) offer(c, &c->edges, support_separation(c, m), ea.index, eb.index, m);
     }
     if (!c->stopped) {
-        /* Not apart along it: forget it, so the full search answers exactly as without the hint. */
+        /* Not apart along it: forget it, so the full search answers exactly
+         * as without the hint; a face's separation stays as the pruning
+         * floor's lo (an edge pair's axis may not be one mk_sat tests, and
+         * could then separate by more than best). */
+        c->lo = mk_max(c->face_a.sep, c->face_b.sep);
         axis_none(&c->face_a);
         axis_none(&c->face_b);
         axis_none(&c->edges);
@@ -352,10 +470,12 @@ void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, con
     ctx_init(&c, R, t, opt);
     c.a = a;
     c.b = b;
+    prune_init(&c, opt);
     if (opt->first != MK_SAT_NONE && first_axis(&c, opt)) {
         finish(&c, opt, out);
         return;
     }
+    if (!(c.lo > -MK_REAL_MAX) && c.ra > -MK_REAL_MAX) prune_seed(&c);
     faces_of_a(&c);
     faces_and_edges_of_b(&c);
     finish(&c, opt, out);
