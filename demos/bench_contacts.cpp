@@ -5,6 +5,8 @@
 //   minko                                mk_collide(), with a per-pair mk_manifold_cache (warm: faces
 //                                        preferred within the hysteresis band, manifold.h)
 //   minko.cold                           mk_collide() without a cache: the exact minimum axis
+//   minko.pose                           mk_collide_pose() with the cache, on poses made once per case
+//                                        (rotation matrices, as Bullet's btTransform and ODE's geoms hold them)
 //   bullet_f64.btBoxBoxDetector          Bullet's port of ODE's dBoxBox, called directly
 //   bullet_f64.btBoxBoxCollisionAlgorithm  what a Bullet world runs per box pair and frame:
 //                                        the detector plus the persistent-manifold update
@@ -28,7 +30,7 @@
 //
 //   bench_contacts [--quick] [--json FILE] [--family stacked|random|apart] [--backend NAME]
 // (--family runs one case family, --backend one backend (a prefix of its
-// name: minko, minko.cold, bullet, ode), e.g. for callgrind instruction
+// name: minko, minko.cold, minko.pose, bullet, ode), e.g. for callgrind instruction
 // counts; ratios are then to that backend.)
 
 #include <algorithm>
@@ -159,19 +161,24 @@ std::vector<Case> make_cases(const char *family, int n, uint64_t seed)
 struct MinkoRun {
     std::vector<mk_shape> a, b;
     std::vector<mk_manifold_cache> cache;
-    bool warm;
-    MinkoRun(const std::vector<Case> &cs, bool warm_) : a(cs.size()), b(cs.size()), cache(cs.size()), warm(warm_)
+    std::vector<mk_pose> pa, pb;
+    bool warm, pose;
+    MinkoRun(const std::vector<Case> &cs, bool warm_, bool pose_ = false)
+        : a(cs.size()), b(cs.size()), cache(cs.size()), pa(cs.size()), pb(cs.size()), warm(warm_), pose(pose_)
     {
         for (size_t i = 0; i < cs.size(); ++i) {
             mk_shape_box(cs[i].ha, 0, &a[i]);
             mk_shape_box(cs[i].hb, 0, &b[i]);
+            mk_pose_from_transform(cs[i].xa, &pa[i]);
+            mk_pose_from_transform(cs[i].xb, &pb[i]);
         }
         memset(cache.data(), 0, cache.size() * sizeof(mk_manifold_cache));
     }
     void query(const std::vector<Case> &cs, size_t i, Answer *ans)
     {
         mk_manifold m;
-        mk_status st = mk_collide(&a[i], cs[i].xa, &b[i], cs[i].xb, 0, warm ? &cache[i] : nullptr, &m);
+        mk_manifold_cache *c = warm ? &cache[i] : nullptr;
+        mk_status st = pose ? mk_collide_pose(&a[i], &pa[i], &b[i], &pb[i], 0, c, &m) : mk_collide(&a[i], cs[i].xa, &b[i], cs[i].xb, 0, c, &m);
         if (!ans) return;
         ans->error = st != MK_OK;
         ans->failed = st != MK_OK || m.count == 0;
@@ -460,7 +467,7 @@ int main(int argc, char **argv)
         std::vector<Case> cs = make_cases(fam, n, fam[0] == 's' ? 1 : fam[0] == 'r' ? 2 : 3);
         std::vector<Backend> bes;
         {
-            MinkoRun run(cs, true), cold(cs, false);
+            MinkoRun run(cs, true), cold(cs, false), posed(cs, true, true);
             mk_manifold probe;
             mk_status st = mk_collide(&run.a[0], cs[0].xa, &run.b[0], cs[0].xb, 0, nullptr, &probe);
             if (st != MK_OK) {
@@ -469,6 +476,7 @@ int main(int argc, char **argv)
             } else {
                 if (wanted(backend, "minko")) bes.push_back(measure("minko", run, cs, loops));
                 if (wanted(backend, "minko.cold")) bes.push_back(measure("minko.cold", cold, cs, loops));
+                if (wanted(backend, "minko.pose")) bes.push_back(measure("minko.pose", posed, cs, loops));
             }
         }
         if (wanted(backend, bullet_detector)) {

@@ -58,10 +58,11 @@
  * than the margin return before anything else. Complexity per call: O(1)
  * for the closed forms and for two boxes (15 axes, a 4-by-4 face clip in
  * the reference box's frame, the clipped points reduced there; on
- * demos/bench_contacts --quick's cases, under callgrind, about 2.9k
- * instructions cold and 3.7k warm for tilted stacked boxes, 2.8k / 3.0k
- * for random overlaps, 1.1k / 1.0k for separated boxes whose bounding
- * boxes overlap; a fifth of it SAT, 0.3k validation); for hulls SAT's O(F_A S_B + F_B S_A +
+ * demos/bench_contacts --quick's cases, under callgrind, about 2.8k
+ * instructions cold and 3.7k warm for tilted stacked boxes (3.4k warm
+ * through mk_collide_pose), 2.7k / 2.9k (2.7k) for random overlaps,
+ * 1.1k / 0.94k (0.72k) for separated boxes whose bounding boxes overlap;
+ * a fifth of it SAT); for hulls SAT's O(F_A S_B + F_B S_A +
  * E_A E_B) (src/sat.h) plus O(n + m) clipping of faces with n and m (at most
  * 32) vertices; GJK/EPA pairs are bounded by their iteration caps.
  *
