@@ -81,7 +81,9 @@ mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map)
         if (static_cast<const btSphereShape *>(shape)->getRadius() == m.radius) return MK_OK;
         break;
     case BOX_SHAPE_PROXYTYPE: {
-        const btVector3 h = static_cast<const btBoxShape *>(shape)->getHalfExtentsWithMargin();
+        // getHalfExtentsWithMargin() less its three virtual getMargin() calls.
+        const btScalar margin = shape->getMargin();
+        const btVector3 h = static_cast<const btBoxShape *>(shape)->getHalfExtentsWithoutMargin() + btVector3(margin, margin, margin);
         if (h.x() == m.u.half_extents.x && h.y() == m.u.half_extents.y && h.z() == m.u.half_extents.z) return MK_OK;
         break;
     }
