@@ -80,6 +80,9 @@ public:
           m_b(b)
     {
         start_cold();
+        // A's Minko frame in A's Bullet frame: its axis rotation, checked once.
+        if (mk_pose_from_transform(mk_transform_make(mk_v3_zero(), m_a.axis), &m_pose_a) != MK_OK)
+            m_pose_a = mk_pose();  // unchecked: every query then refuses, counted as errors
     }
     ~Algorithm() override
     {
@@ -100,9 +103,8 @@ public:
 
         // Shapes are refreshed every step (a few loads), so a resized or
         // rescaled primitive or a new margin is seen at once, as by Bullet.
-        // The query runs in A's Bullet frame: B's pose relative to A costs one
-        // matrix-to-quaternion conversion instead of two, and large world
-        // coordinates cancel before they reach Minko.
+        // The query runs in A's Bullet frame: large world coordinates cancel
+        // before they reach Minko.
         const btTransform &ta = wa->getWorldTransform(), &tb = wb->getWorldTransform();
         const btScalar threshold = m_manifold->getContactBreakingThreshold();
         mk_manifold mf;
@@ -124,9 +126,11 @@ public:
             // a cold cache, and a pair that meets again starts cold.
             start_cold();
         } else if (st == MK_OK) {
-            const btTransform rel = ta.inverseTimes(tb);
-            st = mk_collide(&sa, mk_transform_make(mk_v3_zero(), m_a.axis), &sb, minko_pose(rel, m_b),
-                            threshold, &m_cache, &mf);
+            // B's pose in A's frame goes in as Bullet's rotation matrix,
+            // checked once (mk_pose): no quaternion on the way.
+            mk_pose pb;
+            st = minko_pose(ta.inverseTimes(tb), m_b, &pb);
+            if (st == MK_OK) st = mk_collide_pose(&sa, &m_pose_a, &sb, &pb, threshold, &m_cache, &mf);
         }
         if (st != MK_OK) {
             m_config->stats.collide_errors++;
@@ -194,6 +198,7 @@ private:
     const btCollisionShape *m_shape0;
     CollisionConfiguration *m_config;
     ShapeMap m_a, m_b;  // hulls point into the configuration's cache
+    mk_pose m_pose_a;
     mk_manifold_cache m_cache;
 };
 

@@ -99,6 +99,18 @@ mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map)
     return map_primitive(shape, map);
 }
 
+mk_status minko_pose(const btTransform &world, const ShapeMap &map, mk_pose *out)
+{
+    btMatrix3x3 r = world.getBasis();
+    const mk_quat &ax = map.axis;
+    if (ax.x != 0 || ax.y != 0 || ax.z != 0) r *= btMatrix3x3(btQuaternion(ax.x, ax.y, ax.z, ax.w));
+    mk_mat3 m;
+    m.c0 = to_mk(r.getColumn(0));
+    m.c1 = to_mk(r.getColumn(1));
+    m.c2 = to_mk(r.getColumn(2));
+    return mk_pose_from_matrix(m, to_mk(world.getOrigin()), out);
+}
+
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map)
 {
     mk_transform t = mk_transform_make(to_mk(world.getOrigin()), to_mk(world.getRotation()));
