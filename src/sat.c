@@ -32,6 +32,7 @@ typedef struct sat_ctx {
     mk_real lo, rel, abs_band;
     mk_vec3 ca, cb, ca_in_b; /* A's centroid, B's (in A's frame), A's in B's frame */
     mk_real ra, rb;
+    int prune;               /* 0: a band too wide for the floor's argument */
 } sat_ctx;
 
 mk_sat_options mk_sat_defaults(void)
@@ -102,7 +103,7 @@ typedef struct sat_edge {
  * few tol of their planes). */
 static mk_real prune_floor(const sat_ctx *c)
 {
-    return c->lo > -MK_REAL_MAX ? c->lo - (c->rel * mk_fabs_(c->lo) + c->abs_band) : -MK_REAL_MAX;
+    return c->prune && c->lo > -MK_REAL_MAX ? c->lo - (c->rel * mk_fabs_(c->lo) + c->abs_band) : -MK_REAL_MAX;
 }
 
 static void prune_init(sat_ctx *c, const mk_sat_options *opt)
@@ -119,9 +120,8 @@ static void prune_init(sat_ctx *c, const mk_sat_options *opt)
     c->rb = b->inner_radius - slack;
     c->rel = banded ? opt->prefer_rel : 0;
     c->abs_band = banded ? opt->prefer_abs : 0;
-    /* A band this wide (or not a number) prunes nothing: radii of -max make
-     * every bound +max (and skip the seed). */
-    if (!(c->rel < 1) || !(c->abs_band < MK_REAL_MAX)) c->ra = c->rb = -MK_REAL_MAX;
+    /* A band this wide (or not a number) prunes nothing. */
+    c->prune = c->rel < 1 && c->abs_band < MK_REAL_MAX;
 }
 
 /* Is A's face i below the floor? min_B n.x - d <= n.c_B - r_B - d. */
@@ -475,7 +475,7 @@ void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, con
         finish(&c, opt, out);
         return;
     }
-    if (!(c.lo > -MK_REAL_MAX) && c.ra > -MK_REAL_MAX) prune_seed(&c);
+    if (c.prune && !(c.lo > -MK_REAL_MAX)) prune_seed(&c);
     faces_of_a(&c);
     faces_and_edges_of_b(&c);
     finish(&c, opt, out);
