@@ -31,9 +31,9 @@ typedef struct sat_ctx {
     sat_axis face_a, face_b, edges;
     int stopped;
     /* Pruning (hulls only; see prune_init): the largest separation offered
-     * so far, the centroids of A and B in A's frame, the radii of balls
-     * about them inside each core less the rounding slack, and the band of
-     * the options' hysteresis. */
+     * so far, the band of the options' hysteresis, the rounding slack, the
+     * centroids, the radii of balls about them inside each core (less the
+     * slack) and the probes. */
     mk_real lo, rel, abs_band, slack;
     mk_vec3 ca, cb, ca_in_b; /* A's centroid, B's (in A's frame), A's in B's frame */
     mk_real ra, rb;
@@ -103,10 +103,12 @@ typedef struct sat_edge {
  * never ties). Cheap upper bounds on the separation along one face, or
  * along every axis an edge of B takes part in, then skip most support
  * queries and Gauss-map walks of a penetrating pair. The bounds come from
- * balls inside the cores: along any unit n, min_B n.x <= n.c_B - r_B and
- * max_A n.x >= n.c_A + r_A, c the centroid, r the inner radius, less a slack
- * for rounding and for the construction tolerance (vertices lie within a
- * few tol of their planes). */
+ * points known to be in the cores: a ball inside each (along any unit n,
+ * min_B n.x <= n.c_B - r_B and max_A n.x >= n.c_A + r_A, c the centroid, r
+ * the inner radius) and a few vertices (probes), with a slack for rounding
+ * and for the construction tolerance (vertices lie within a few tol of
+ * their planes). A warm call that stops on its first axis (apart) pays for
+ * none of this. */
 static mk_real prune_floor(const sat_ctx *c)
 {
     return c->prune && c->lo > -MK_REAL_MAX ? c->lo - (c->rel * mk_fabs_(c->lo) + c->abs_band) : -MK_REAL_MAX;
@@ -120,7 +122,6 @@ static void prune_init(sat_ctx *c, const mk_sat_options *opt)
     /* the six axis-extreme vertices stored after the neighbour lists */
     const uint16_t *xa = a->adjacency + a->adjacency[a->vertex_count], *xb = b->adjacency + b->adjacency[b->vertex_count];
     int banded = opt->prefer != MK_SAT_NONE, k;
-    c->lo = -MK_REAL_MAX;
     c->ca = a->centroid;
     c->cb = mk_v3_add(mk_mat3_mul_v3(c->R, b->centroid), c->t);
     c->ca_in_b = mk_mat3_tmul_v3(c->R, mk_v3_sub(c->ca, c->t));
@@ -514,11 +515,11 @@ void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, con
     ctx_init(&c, R, t, opt);
     c.a = a;
     c.b = b;
-    prune_init(&c, opt);
     if (opt->first != MK_SAT_NONE && first_axis(&c, opt)) {
         finish(&c, opt, out);
         return;
     }
+    prune_init(&c, opt);
     if (c.prune) prune_seed(&c);
     faces_of_a(&c);
     faces_and_edges_of_b(&c);
