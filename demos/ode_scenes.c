@@ -12,7 +12,7 @@
  * are then identical, which the `same` column checks against the first
  * backend of each case.
  *
- *   ode_scenes [--quick] [--json FILE] [--scene NAME]
+ *   ode_scenes [--quick] [--json FILE] [--scene NAME] [--reps N] [--poses FILE]
  *
  * Per case and backend: median ms per step (space collide, colliders = the
  * near-callback pass incl. contact joints, total incl. QuickStep), candidate
@@ -24,7 +24,8 @@
  * The resting scenes use ODE's usual 1 mm contact surface layer (the same
  * for every backend); the stress scene is ODE's demo as it is.
  *
- * Scenes: stress (ODE's demo_space_stress), tower (10 boxes), pyramid (210
+ * Scenes: stress (ODE's demo_space_stress), stress_space (its frames
+ * replayed through each space alone: see run_space_only), tower (10 boxes), pyramid (210
  * boxes), hulls (20 random convex hulls on a box ground), mixed (sizes
  * 1:100 in a pit), wall (spheres fired at a thin wall, 10 to 1000 m/s; the
  * minko.toi backend splits steps at Minko's times of impact), and
@@ -888,6 +889,265 @@ static void run_case(const scene *sc, FILE *json)
     for (b = 0; b < n; b++) sim_free(&sims[b]);
 }
 
+/* ---- space collide alone: the stress heap replayed through each space ----
+ *
+ * The stress case times a space collide inside a running simulation, where
+ * each backend's world drifts apart and the machine's noise lands on one
+ * backend's step at a time. Here the heap is simulated once (native SAP space
+ * and colliders), every body's pose is recorded before each step's collision,
+ * and the same frames are replayed through dHashSpace, dSweepAndPruneSpace
+ * and Minko's space collide in one process: per frame, each space's bodies
+ * are set to the recorded poses (untimed), then only the space collide is
+ * timed, with the same trivial near callback for all three (it stores the two
+ * geom pointers). The pair sets are compared outside the timing. Each frame's
+ * time is the best of `reps` replays (each replay starts Minko cold), and the
+ * spaces take turns going first.
+ *
+ * --frames A:B measures frames A..B-1 only: ODE's spaces keep nothing from
+ * call to call and skip the frames before A; Minko's runs them untimed, so
+ * its state is that of the whole replay.
+ *
+ * For a stable figure: the measured space collides (but frame 0, Minko's
+ * cold start) go through the functions space_only_ode_hash,
+ * space_only_ode_sap and space_only_minko, so
+ *   valgrind --tool=callgrind --toggle-collect='space_only_*' \
+ *     build/demos/ode_scenes --scene stress_space --reps 1 --frames A:B --poses FILE
+ * gives each space's instructions (inclusive cost of its function) over the
+ * B - A frames (B - 1 when A = 0). --poses FILE reads the recorded frames from
+ * FILE if it exists, else records them there, so the simulation need not run
+ * under valgrind. */
+
+typedef struct pair_sink { dGeomID (*p)[2]; size_t n, cap; } pair_sink;
+
+static void sink_cb(void *data, dGeomID a, dGeomID b)
+{
+    pair_sink *k = data;
+    if (k->n == k->cap) {
+        k->cap = k->cap ? 2 * k->cap : 65536;
+        k->p = xrealloc(k->p, k->cap * sizeof *k->p);
+    }
+    k->p[k->n][0] = a;
+    k->p[k->n][1] = b;
+    k->n++;
+}
+
+/* Not static, never inlined: callgrind's --toggle-collect finds them by name. */
+#if defined(__GNUC__)
+#  define SPACE_ONLY_FN __attribute__((noinline))
+#else
+#  define SPACE_ONLY_FN
+#endif
+SPACE_ONLY_FN void space_only_ode_hash(dSpaceID space, pair_sink *k);
+SPACE_ONLY_FN void space_only_ode_sap(dSpaceID space, pair_sink *k);
+SPACE_ONLY_FN void space_only_minko(dSpaceID space, pair_sink *k);
+SPACE_ONLY_FN void space_only_ode_hash(dSpaceID space, pair_sink *k) { dSpaceCollide(space, k, sink_cb); }
+SPACE_ONLY_FN void space_only_ode_sap(dSpaceID space, pair_sink *k) { dSpaceCollide(space, k, sink_cb); }
+SPACE_ONLY_FN void space_only_minko(dSpaceID space, pair_sink *k) { mk_ode_space_collide(space, k, sink_cb); }
+
+typedef void space_only_fn(dSpaceID space, pair_sink *k);
+
+static const struct {
+    backend be;
+    space_only_fn *timed;
+} SPACE_ONLY[] = {
+    {{"ode.hash", SPACE_HASH, dSpaceCollide, dCollide, 0}, space_only_ode_hash},
+    {{"ode.sap", SPACE_SAP, dSpaceCollide, dCollide, 0}, space_only_ode_sap},
+    {{"minko", SPACE_SIMPLE, mk_ode_space_collide, dCollide, 0}, space_only_minko},
+};
+#define NSPACE_ONLY 3
+#define SPACE_ONLY_MINKO 2
+
+/* Poses of every body, frame by frame: position then quaternion (7 dReal). */
+typedef struct recording { int nbodies, frames; dReal *pose; } recording;
+
+static dReal *rec_pose(const recording *r, int frame, int body) { return r->pose + 7 * ((size_t)frame * (size_t)r->nbodies + (size_t)body); }
+
+static void record_frames(const scene *sc, recording *r)
+{
+    static const backend native = {"ode.sap", SPACE_SAP, dSpaceCollide, dCollide, 0};
+    sim s;
+    int f, k;
+    sim_init(&s, &native, sc);
+    r->nbodies = s.nbodies;
+    r->frames = sc->steps;
+    r->pose = xrealloc(NULL, 7 * (size_t)r->frames * (size_t)r->nbodies * sizeof(dReal));
+    for (f = 0; f < r->frames; f++) {
+        for (k = 0; k < s.nbodies; k++) {
+            memcpy(rec_pose(r, f, k), dBodyGetPosition(s.bodies[k].body), 3 * sizeof(dReal));
+            memcpy(rec_pose(r, f, k) + 3, dBodyGetQuaternion(s.bodies[k].body), 4 * sizeof(dReal));
+        }
+        sim_step(&s);
+    }
+    sim_free(&s);
+}
+
+#define POSES_MAGIC 0x4d4b4f44u /* "MKOD" */
+
+/* 1 if `path` held a recording of this scene (read into r). */
+static int load_frames(const char *path, const scene *sc, recording *r)
+{
+    FILE *f = fopen(path, "rb");
+    uint32_t head[4];
+    size_t n;
+    if (!f) return 0;
+    if (fread(head, sizeof head, 1, f) != 1 || head[0] != POSES_MAGIC || head[1] != (uint32_t)sc->n ||
+        head[3] != (uint32_t)sc->steps) {
+        fclose(f);
+        fprintf(stderr, "ode_scenes: %s is not a recording of %s %s\n", path, sc->name, sc->variant);
+        exit(2);
+    }
+    r->nbodies = (int)head[2];
+    r->frames = (int)head[3];
+    n = 7 * (size_t)r->frames * (size_t)r->nbodies;
+    r->pose = xrealloc(NULL, n * sizeof(dReal));
+    if (fread(r->pose, sizeof(dReal), n, f) != n) {
+        fprintf(stderr, "ode_scenes: %s is truncated\n", path);
+        exit(2);
+    }
+    fclose(f);
+    return 1;
+}
+
+static void save_frames(const char *path, const scene *sc, const recording *r)
+{
+    FILE *f = fopen(path, "wb");
+    uint32_t head[4] = {POSES_MAGIC, (uint32_t)sc->n, (uint32_t)r->nbodies, (uint32_t)r->frames};
+    size_t n = 7 * (size_t)r->frames * (size_t)r->nbodies;
+    if (!f || fwrite(head, sizeof head, 1, f) != 1 || fwrite(r->pose, sizeof(dReal), n, f) != n || fclose(f) != 0) {
+        perror(path);
+        exit(2);
+    }
+}
+
+/* A space's pairs as sorted (low id, high id). */
+static void canonical_pairs(const pair_sink *k, pair **out, size_t *cap)
+{
+    size_t i;
+    if (*cap < k->n) {
+        *cap = k->n;
+        *out = xrealloc(*out, *cap * sizeof **out);
+    }
+    for (i = 0; i < k->n; i++) {
+        uint32_t a = geom_id(k->p[i][0]), b = geom_id(k->p[i][1]);
+        (*out)[i].a = a < b ? a : b;
+        (*out)[i].b = a < b ? b : a;
+    }
+    qsort(*out, k->n, sizeof **out, cmp_pair);
+}
+
+/* Pairs of `ref` not in `got` (missing) and of `got` not in `ref` (extra), as multisets. */
+static void diff_pairs(const pair *ref, size_t nref, const pair *got, size_t ngot, long long *missing, long long *extra)
+{
+    size_t i = 0, j = 0;
+    while (i < nref || j < ngot) {
+        int c = i == nref ? 1 : j == ngot ? -1 : cmp_pair(&ref[i], &got[j]);
+        if (c < 0) { (*missing)++; i++; }
+        else if (c > 0) { (*extra)++; j++; }
+        else { i++; j++; }
+    }
+}
+
+static void pose_bodies(const sim *s, const recording *r, int frame)
+{
+    int k;
+    for (k = 0; k < s->nbodies; k++) {
+        const dReal *p = rec_pose(r, frame, k);
+        dBodySetPosition(s->bodies[k].body, p[0], p[1], p[2]);
+        dBodySetQuaternion(s->bodies[k].body, p + 3);
+    }
+}
+
+static void run_space_only(const scene *sc, int reps, int from, int to, const char *poses_path, FILE *json)
+{
+    recording rec;
+    sim sims[NSPACE_ONLY];
+    pair_sink sink = {NULL, 0, 0};
+    pair *got[NSPACE_ONLY] = {NULL, NULL, NULL};
+    size_t gotcap[NSPACE_ONLY] = {0, 0, 0}, ngot[NSPACE_ONLY];
+    double *best[NSPACE_ONLY], med[NSPACE_ONLY], mean[NSPACE_ONLY], fastest_ode;
+    long long npairs[NSPACE_ONLY] = {0, 0, 0}, missing[NSPACE_ONLY] = {0, 0, 0}, extra[NSPACE_ONLY] = {0, 0, 0};
+    int f, b, rep;
+    if (!poses_path || !load_frames(poses_path, sc, &rec)) {
+        record_frames(sc, &rec);
+        if (poses_path) save_frames(poses_path, sc, &rec);
+    }
+    if (to <= 0 || to > rec.frames) to = rec.frames;
+    if (from < 0 || from >= to) from = 0;
+    for (b = 0; b < NSPACE_ONLY; b++) {
+        sim_init(&sims[b], &SPACE_ONLY[b].be, sc);
+        best[b] = xrealloc(NULL, (size_t)rec.frames * sizeof(double));
+        for (f = 0; f < rec.frames; f++) best[b][f] = HUGE_VAL;
+    }
+    for (rep = 0; rep < reps; rep++) {
+        mk_ode_space_forget(sims[SPACE_ONLY_MINKO].space); /* every replay starts cold */
+        for (f = 0; f < to; f++) {
+            int turn;
+            for (turn = 0; turn < NSPACE_ONLY; turn++) {
+                double t0, t;
+                b = (f + turn) % NSPACE_ONLY;
+                if (f < from && b != SPACE_ONLY_MINKO) continue; /* ODE's spaces keep no state between calls */
+                pose_bodies(&sims[b], &rec, f);
+                sink.n = 0;
+                t0 = now_ms();
+                if (f == 0 || f < from)
+                    SPACE_ONLY[b].be.space_collide(sims[b].space, &sink, sink_cb);
+                else
+                    SPACE_ONLY[b].timed(sims[b].space, &sink);
+                t = now_ms() - t0;
+                if (t < best[b][f]) best[b][f] = t;
+                if (rep == 0 && f >= from) {
+                    npairs[b] += (long long)sink.n;
+                    canonical_pairs(&sink, &got[b], &gotcap[b]);
+                    ngot[b] = sink.n;
+                }
+            }
+            if (rep == 0 && f >= from)
+                for (b = 0; b < NSPACE_ONLY; b++)
+                    if (b != SPACE_ONLY_MINKO)
+                        diff_pairs(got[b], ngot[b], got[SPACE_ONLY_MINKO], ngot[SPACE_ONLY_MINKO], &missing[b], &extra[b]);
+        }
+    }
+    for (b = 0; b < NSPACE_ONLY; b++) {
+        mean[b] = 0;
+        for (f = from; f < to; f++) mean[b] += best[b][f] / (to - from);
+        med[b] = median(best[b] + from, to - from);
+    }
+    fastest_ode = fmin(med[0], med[1]);
+    printf("\nstress_space %s: frames %d..%d of the stress heap (%d bodies) replayed through each space; space collide alone,\n"
+           "the same pair-storing callback for all; per frame the best of %d replays (ms: median and mean over frames;\n"
+           "pair differences with Minko's set summed over frames)\n",
+           sc->variant, from, to - 1, rec.nbodies, reps);
+    printf("  %-10s %9s %9s %10s %14s %14s %10s\n", "backend", "median", "mean", "pairs", "not_in_minko", "only_minko",
+           "vs_fastest");
+    for (b = 0; b < NSPACE_ONLY; b++) {
+        double ratio = med[b] / fastest_ode;
+        const char *name = SPACE_ONLY[b].be.name;
+        if (b == SPACE_ONLY_MINKO)
+            printf("  %-10s %9.3f %9.3f %10.1f %14s %14s %10.2f\n", name, med[b], mean[b], (double)npairs[b] / (to - from),
+                   "-", "-", ratio);
+        else
+            printf("  %-10s %9.3f %9.3f %10.1f %14lld %14lld %10.2f\n", name, med[b], mean[b], (double)npairs[b] / (to - from),
+                   missing[b], extra[b], ratio);
+        if (!json) continue;
+        fprintf(json,
+                "{\"suite\":\"ode\",\"case\":\"stress_space\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":%d,\"bodies\":%d,"
+                "\"first_frame\":%d,\"reps\":%d,\"space_ms_per_frame\":%.6g,\"space_ms_mean\":%.6g,\"pairs_per_frame\":%.6g,"
+                "\"ratio_to_fastest_ode\":%.6g",
+                sc->variant, name, to - from, rec.nbodies, from, reps, med[b], mean[b], (double)npairs[b] / (to - from), ratio);
+        if (b != SPACE_ONLY_MINKO)
+            fprintf(json, ",\"pairs_not_in_minko\":%lld,\"pairs_only_in_minko\":%lld", missing[b], extra[b]);
+        fprintf(json, "}\n");
+        fflush(json);
+    }
+    for (b = 0; b < NSPACE_ONLY; b++) {
+        sim_free(&sims[b]);
+        free(best[b]);
+        free(got[b]);
+    }
+    free(sink.p);
+    free(rec.pose);
+}
+
 /* ---- hull-hull penetration depth against the exact reference ---- */
 
 typedef struct depth_case {
@@ -1104,9 +1364,9 @@ static int make_cases(scene *out, int quick)
 int main(int argc, char **argv)
 {
     scene cases[MAXCASES];
-    const char *json_path = NULL, *only = NULL;
+    const char *json_path = NULL, *only = NULL, *poses_path = NULL;
     FILE *json = NULL;
-    int quick = 0, ncases, i;
+    int quick = 0, reps = 3, from = 0, to = 0, ncases, i;
 
     for (i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick"))
@@ -1115,8 +1375,18 @@ int main(int argc, char **argv)
             json_path = argv[++i];
         else if (!strcmp(argv[i], "--scene") && i + 1 < argc)
             only = argv[++i];
+        else if (!strcmp(argv[i], "--reps") && i + 1 < argc && atoi(argv[i + 1]) > 0)
+            reps = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--poses") && i + 1 < argc)
+            poses_path = argv[++i];
+        else if (!strcmp(argv[i], "--frames") && i + 1 < argc && sscanf(argv[i + 1], "%d:%d", &from, &to) == 2)
+            i++;
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--scene stress|tower|pyramid|hulls|mixed|wall|hull_depth]\n", argv[0]);
+            fprintf(stderr,
+                    "usage: %s [--quick] [--json FILE] [--scene stress|stress_space|tower|pyramid|hulls|mixed|wall|hull_depth]\n"
+                    "       [--reps N] [--poses FILE] [--frames A:B]   (stress_space: replays per frame; recorded frames,\n"
+                    "       read or written; the frames A..B-1 measured)\n",
+                    argv[0]);
             return 2;
         }
     }
@@ -1132,8 +1402,11 @@ int main(int argc, char **argv)
         for (i = 0; i < NHULLS; i++) hull_make(&hulls[i], &r);
     }
     ncases = make_cases(cases, quick);
-    for (i = 0; i < ncases; i++)
+    for (i = 0; i < ncases; i++) {
         if (!only || !strcmp(only, cases[i].name)) run_case(&cases[i], json);
+        if (cases[i].build == build_stress && (!only || !strcmp(only, "stress_space")))
+            run_space_only(&cases[i], reps, from, to, poses_path, json);
+    }
     if (!only || !strcmp(only, "hull_depth")) run_hull_depth(quick, json);
     for (i = 0; i < NHULLS; i++) hull_free(&hulls[i]);
     mk_ode_close();

@@ -13,7 +13,9 @@
  *  - proxies carry a fattened AABB (the geom's grown by FAT_MARGIN of its
  *    size) and move only when the geom's AABB leaves it, so geoms that rest
  *    or creep cost the broadphase nothing; the exact dReal test removes the
- *    extra candidate pairs this brings;
+ *    extra candidate pairs this brings; the moves go in one batch;
+ *  - pairs map to records through an array indexed by the proxies' slots,
+ *    with no call per pair;
  *  - ODE keeps a space's list order unless a clean geom is dirtied, and geoms
  *    in a space only the adapter collides stay dirty, so the order of the
  *    previous call usually finds each geom's record without hashing;
@@ -32,15 +34,17 @@
 #include "ode_internal.h"
 #include "ode_map.h"
 
+/* The fields a candidate pair reads come first: with the slot map below,
+ * the pair loop touches two entries and nothing else. */
 typedef struct entry {
     dGeomID geom;     /* NULL: free slot */
-    mk_bp_id proxy;
-    uint32_t seen;    /* sync epoch that last found the geom in the space */
     uint32_t checked; /* sync epoch of the filter fields below */
     int ok;           /* enabled and not zero-sized */
     dBodyID body;
     unsigned long cat, col;
     dReal aabb[6];    /* ODE's interleaved AABB {minx, maxx, miny, maxy, minz, maxz} */
+    mk_bp_id proxy;
+    uint32_t seen;    /* sync epoch that last found the geom in the space */
     mk_aabb fat;      /* the proxy's AABB: contains aabb, rounded outwards */
 } entry;
 
@@ -53,12 +57,15 @@ typedef struct space_state {
     mk_bp *bp;
     int capacity;     /* proxy capacity of bp */
     entry *entries;   /* slots; a proxy's user pointer is its slot + 1 */
+    int *of_proxy;    /* MK_BP_SLOT(proxy) -> slot, so pairs need no call per proxy */
     int nslots, capslots, live;
     int *free_slots;
     int nfree;
     mk_ode_map index; /* dGeomID -> slot */
     int *order;       /* slot of the i-th geom of the previous enumeration */
     size_t norder, caporder;
+    struct move { mk_bp_id proxy; int slot; mk_aabb box; } *moves; /* one call's proxy moves, made in one batch */
+    size_t capmoves;
     uint32_t epoch;
 } space_state;
 
@@ -118,14 +125,18 @@ static int zero_sized(dGeomID g)
     }
 }
 
-static void check_entry(const space_state *st, entry *e)
+static void read_filter(const space_state *st, entry *e)
 {
-    if (e->checked == st->epoch) return;
     e->checked = st->epoch;
     e->ok = dGeomIsEnabled(e->geom) && !zero_sized(e->geom);
     e->body = dGeomGetBody(e->geom);
     e->cat = dGeomGetCategoryBits(e->geom);
     e->col = dGeomGetCollideBits(e->geom);
+}
+
+static void check_entry(const space_state *st, entry *e)
+{
+    if (e->checked != st->epoch) read_filter(st, e);
 }
 
 /* collideAABBs' tests in its order, on exact dReal AABBs (a NaN bound
@@ -160,24 +171,40 @@ static mk_real round_up(dReal x)
 }
 
 /* The broadphase refuses NaN and inverted boxes; ODE never separates a NaN
- * bound, so such an axis is treated as filling all space. `grow` widens
- * each side (0 for the exact box); the result contains the dReal box. */
+ * bound, so such an axis is treated as filling all space. `grow` (>= 0)
+ * widens each side (0 for the exact box); the result contains the dReal
+ * box. A side at +inf (or -inf) on both ends becomes the largest finite
+ * value to infinity, since the broadphase refuses lo = +inf and hi = -inf. */
 static mk_aabb to_mk_aabb_grown(const dReal *b, dReal grow)
 {
     mk_aabb box;
     mk_real inf = (mk_real)HUGE_VAL, *lo = &box.lo.x, *hi = &box.hi.x;
     int k;
+#if !defined(MK_SINGLE)
+    /* mk_real is dReal: a box with ordered, finite bounds (every geom but
+     * planes) converts without rounding or special cases. */
+    if ((b[0] <= b[1]) & (b[2] <= b[3]) & (b[4] <= b[5]) & (b[0] <= DBL_MAX) & (b[2] <= DBL_MAX) & (b[4] <= DBL_MAX) &
+        (b[1] >= -DBL_MAX) & (b[3] >= -DBL_MAX) & (b[5] >= -DBL_MAX)) {
+        box.lo = mk_v3(b[0] - grow, b[2] - grow, b[4] - grow);
+        box.hi = mk_v3(b[1] + grow, b[3] + grow, b[5] + grow);
+        return box;
+    }
+#endif
     for (k = 0; k < 3; k++) {
         dReal l = b[2 * k], h = b[2 * k + 1];
         if (!(l <= h)) {
             lo[k] = -inf;
             hi[k] = inf;
-            continue;
+        } else if (l == (dReal)HUGE_VAL) {
+            lo[k] = MK_REAL_MAX;
+            hi[k] = inf;
+        } else if (h == -(dReal)HUGE_VAL) {
+            lo[k] = -inf;
+            hi[k] = -MK_REAL_MAX;
+        } else {
+            lo[k] = round_down(l - grow);
+            hi[k] = round_up(h + grow);
         }
-        lo[k] = round_down(l - grow); /* inf - grow stays inf */
-        hi[k] = round_up(h + grow);
-        if (lo[k] == inf) lo[k] = MK_REAL_MAX;
-        if (hi[k] == -inf) hi[k] = -MK_REAL_MAX;
     }
     return box;
 }
@@ -195,12 +222,10 @@ static int inside_fat(const dReal *b, const mk_aabb *fat)
 /* The proxy's box: the geom's grown by FAT_MARGIN of its largest finite extent. */
 static mk_aabb fat_box(const dReal *b)
 {
-    dReal size = 0;
+    dReal size = 0, e;
     int k;
-    for (k = 0; k < 3; k++) {
-        dReal e = b[2 * k + 1] - b[2 * k];
-        if (e > size && e <= DBL_MAX) size = e;
-    }
+    for (k = 0; k < 3; k++)
+        if ((e = b[2 * k + 1] - b[2 * k]) > size && e <= DBL_MAX) size = e;
     return to_mk_aabb_grown(b, FAT_MARGIN * size);
 }
 
@@ -209,7 +234,10 @@ static mk_aabb fat_box(const dReal *b)
 static void *slot_user(int slot) { return (void *)(uintptr_t)(slot + 1); }
 static int user_slot(void *user) { return (int)(uintptr_t)user - 1; }
 
-static mk_status create_bp(space_state *st, int capacity)
+/* A broadphase of `capacity` proxies holding every entry's proxy box; the
+ * new ids go to ids[slot] and the slot map to of_proxy, so that a failure
+ * leaves `st` as it was. */
+static mk_status new_bp(const space_state *st, int capacity, mk_bp **out, mk_bp_id *ids, int *of_proxy)
 {
     mk_bp_def def = mk_bp_default_def();
     int i;
@@ -223,40 +251,47 @@ static mk_status create_bp(space_state *st, int capacity)
     /* The near callback gets the whole set each call, never the changes:
      * lets incoherent frames (the heap exploding) skip the pair table. */
     def.pairs_only = 1;
-    s = mk_bp_create(&def, NULL, &st->bp);
+    s = mk_bp_create(&def, NULL, out);
     if (s == MK_ERR_UNSUPPORTED) { /* a build without SAP (MK_WITHOUT) */
         def.kind = MK_BP_AUTO;
-        s = mk_bp_create(&def, NULL, &st->bp);
+        s = mk_bp_create(&def, NULL, out);
     }
-    if (s != MK_OK) return s;
-    st->capacity = capacity;
-    for (i = 0; i < st->nslots; i++) {
-        entry *e = &st->entries[i];
+    for (i = 0; s == MK_OK && i < st->nslots; i++) {
+        const entry *e = &st->entries[i];
         if (!e->geom) continue;
-        s = mk_bp_create_proxy(st->bp, e->fat, slot_user(i), ~(uint64_t)0, ~(uint64_t)0, 0, &e->proxy);
-        if (s != MK_OK) return s;
+        s = mk_bp_create_proxy(*out, e->fat, slot_user(i), ~(uint64_t)0, ~(uint64_t)0, 0, &ids[i]);
+        if (s == MK_OK) of_proxy[MK_BP_SLOT(ids[i])] = i;
     }
-    return MK_OK;
+    return s;
 }
 
 /* The broadphase's proxy capacity is fixed at creation: rebuild it twice as
  * large when the space outgrows it (not a steady-state event). */
 static mk_status reserve(space_state *st, int n)
 {
-    int cap = st->capacity;
-    mk_bp *old = st->bp;
+    int cap = st->capacity, i, *of_proxy;
+    mk_bp *bp = NULL;
+    mk_bp_id *ids;
     mk_status s;
     if (n <= cap && st->bp) return MK_OK;
     while (cap < n) cap = cap ? 2 * cap : 256;
-    st->bp = NULL;
-    s = create_bp(st, cap);
-    if (s != MK_OK) {
+    ids = malloc(((size_t)st->nslots + 1) * sizeof *ids);
+    of_proxy = malloc((size_t)cap * sizeof *of_proxy);
+    s = ids && of_proxy ? new_bp(st, cap, &bp, ids, of_proxy) : MK_ERR_OUT_OF_MEMORY;
+    if (s == MK_OK) {
+        for (i = 0; i < st->nslots; i++)
+            if (st->entries[i].geom) st->entries[i].proxy = ids[i];
         if (st->bp) mk_bp_destroy(st->bp);
-        st->bp = old;
-        return s;
+        free(st->of_proxy);
+        st->bp = bp;
+        st->of_proxy = of_proxy;
+        st->capacity = cap;
+    } else {
+        if (bp) mk_bp_destroy(bp);
+        free(of_proxy);
     }
-    if (old) mk_bp_destroy(old);
-    return MK_OK;
+    free(ids);
+    return s;
 }
 
 static space_state *state_for(dSpaceID space)
@@ -284,8 +319,10 @@ static void free_state(space_state *st)
 {
     if (st->bp) mk_bp_destroy(st->bp);
     free(st->entries);
+    free(st->of_proxy);
     free(st->free_slots);
     free(st->order);
+    free(st->moves);
     mk_ode_map_free(&st->index);
     free(st);
 }
@@ -323,6 +360,7 @@ static mk_status add_entry(space_state *st, dGeomID g, const dReal *box, long *o
         st->free_slots[st->nfree++] = slot;
         return s;
     }
+    st->of_proxy[MK_BP_SLOT(e->proxy)] = slot;
     st->live++;
     *out = slot;
     return MK_OK;
@@ -346,10 +384,12 @@ static void remove_entry(space_state *st, int slot)
  * geom just looks moved, which is right: nothing else is cached across calls. */
 static mk_status sync(space_state *st)
 {
-    int n = dSpaceGetNumGeoms(st->space), i;
-    mk_status s = reserve(st, n);
+    int n = dSpaceGetNumGeoms(st->space), i, k, nmoves = 0, done;
+    mk_status sm, s = reserve(st, n);
     if (s != MK_OK) return s;
-    if (grow_array((void **)&st->order, &st->caporder, (size_t)n, sizeof *st->order) != 0) return MK_ERR_OUT_OF_MEMORY;
+    if (grow_array((void **)&st->order, &st->caporder, (size_t)n, sizeof *st->order) != 0 ||
+        grow_array((void **)&st->moves, &st->capmoves, (size_t)n, sizeof *st->moves) != 0)
+        return MK_ERR_OUT_OF_MEMORY;
     st->epoch++;
     for (i = 0; i < n; i++) {
         dGeomID g = dSpaceGetGeom(st->space, i); /* sequential access is O(1) in ODE */
@@ -360,19 +400,28 @@ static mk_status sync(space_state *st)
         dGeomGetAABB(g, box);
         if (slot < 0) {
             s = add_entry(st, g, box, &slot);
-            if (s != MK_OK) return s;
+            if (s != MK_OK) break;
         } else if (memcmp(st->entries[slot].aabb, box, sizeof box) != 0) {
             e = &st->entries[slot];
-            memcpy(e->aabb, box, sizeof box);
             if (!inside_fat(box, &e->fat)) {
                 e->fat = fat_box(box);
-                s = mk_bp_move_proxy(st->bp, e->proxy, e->fat);
-                if (s != MK_OK) return s;
+                st->moves[nmoves].proxy = e->proxy;
+                st->moves[nmoves].slot = (int)slot;
+                st->moves[nmoves].box = e->fat;
+                nmoves++;
             }
+            memcpy(e->aabb, box, sizeof box);
         }
         st->entries[slot].seen = st->epoch;
         st->order[i] = (int)slot;
     }
+    sm = mk_bp_move_proxies(st->bp, &st->moves[0].proxy, sizeof *st->moves, &st->moves[0].box, sizeof *st->moves, nmoves,
+                            &done);
+    /* Proxies left behind by a failure keep their box: the records say so,
+     * and the next call moves them. */
+    for (k = done; k < nmoves; k++) mk_bp_get_proxy(st->bp, st->moves[k].proxy, &st->entries[st->moves[k].slot].fat, NULL);
+    if (s != MK_OK) return s;
+    if (sm != MK_OK) return sm;
     st->norder = (size_t)n;
     /* Every enumerated geom is live and seen, so live > n means some were not. */
     for (i = 0; st->live > n && i < st->nslots; i++)
@@ -427,15 +476,20 @@ void mk_ode_space_collide(dSpaceID space, void *data, dNearCallback *callback)
         return;
     }
     pairs = mk_bp_pairs(st->bp, &np);
+    /* Room for every candidate up front: the loop below only stores. */
+    if (grow_array((void **)&report, &capreport, nreport + (size_t)np, sizeof *report) != 0) {
+        note_error(MK_ERR_OUT_OF_MEMORY);
+        return;
+    }
     for (i = 0; i < np; i++) {
-        entry *a = &st->entries[user_slot(mk_bp_user(st->bp, pairs[i].a))];
-        entry *b = &st->entries[user_slot(mk_bp_user(st->bp, pairs[i].b))];
+        entry *a = &st->entries[st->of_proxy[MK_BP_SLOT(pairs[i].a)]];
+        entry *b = &st->entries[st->of_proxy[MK_BP_SLOT(pairs[i].b)]];
         check_entry(st, a);
         check_entry(st, b);
-        if (a->ok && b->ok && ode_filter(a->body, a->cat, a->col, a->aabb, b->body, b->cat, b->col, b->aabb) &&
-            push_pair(a->geom, b->geom) != 0) {
-            note_error(MK_ERR_OUT_OF_MEMORY);
-            break;
+        if (a->ok && b->ok && ode_filter(a->body, a->cat, a->col, a->aabb, b->body, b->cat, b->col, b->aabb)) {
+            report[nreport].a = a->geom;
+            report[nreport].b = b->geom;
+            nreport++;
         }
     }
     flush(from, data, callback);

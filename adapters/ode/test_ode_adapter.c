@@ -250,6 +250,38 @@ START_TEST(test_pairs_match_simple_and_hash)
 }
 END_TEST
 
+/* The adapter's broadphase is rebuilt larger whenever the space outgrows
+ * its capacity (256 proxies, then doubling): the pairs stay ODE's across
+ * each rebuild, and after the space shrinks again. */
+#define NGROW 900
+START_TEST(test_space_grows)
+{
+    mk_rng r = {0x0de0007u};
+    scene sc;
+    dGeomID *extra = malloc(NGROW * sizeof *extra);
+    int i, round;
+    ck_assert_ptr_nonnull(extra);
+    dInitODE2(0);
+    scene_make(&sc, &r, dSimpleSpaceCreate(0));
+    compare_space(sc.space, "grow", 0);
+    for (round = 0; round < 3; round++) {
+        for (i = round * NGROW / 3; i < (round + 1) * NGROW / 3; i++) {
+            extra[i] = random_geom(&r, sc.space);
+            place(&r, &sc, extra[i]);
+        }
+        scene_churn(&sc, &r);
+        compare_space(sc.space, "grow", round + 1);
+    }
+    for (i = 0; i < NGROW; i += 1 + (i % 3 != 0)) dGeomDestroy(extra[i]);
+    compare_space(sc.space, "grow", 4);
+    scene_churn(&sc, &r);
+    compare_space(sc.space, "grow", 5);
+    scene_free(&sc);
+    free(extra);
+    mk_ode_close();
+}
+END_TEST
+
 /* Both argument orders and every space/geom combination of dSpaceCollide2,
  * compared as ordered pairs (the o1 side must come first). */
 START_TEST(test_collide2_matches_ode)
@@ -1017,6 +1049,7 @@ int main(void)
     tcase_set_timeout(bp, 120);
     tcase_add_loop_test(bp, test_pairs_match_simple_and_hash, 0, 4);
     tcase_add_loop_test(bp, test_collide2_matches_ode, 0, 3);
+    tcase_add_test(bp, test_space_grows);
     tcase_add_test(bp, test_nested_spaces_expand_alike);
     tcase_add_test(bp, test_order_is_deterministic);
     tcase_add_test(bp, test_touching_aabbs);
