@@ -192,7 +192,7 @@ mk_status mk_pairs_add_(mk_bp *bp, uint32_t a, uint32_t b)
     mk_status st = MK_OK;
     mk_pair_entry *e = find(&bp->pairs, mk_pair_key_(a, b));
     if (e && (e->state & MK_PS_LIVE)) return MK_OK;
-    if (!mk_bp_filter_pass_(bp, a, b)) return MK_OK;
+    if (!mk_bp_filter_keeps_(bp, a, b)) return MK_OK;
     if (!e && !(e = insert(bp, mk_pair_key_(a, b), &st))) return st;
     e->state |= MK_PS_LIVE;
     mk_pairs_touch_(bp, e);
@@ -251,7 +251,7 @@ mk_status mk_pairs_full_add_(mk_bp *bp, uint32_t a, uint32_t b)
 {
     uint64_t key = mk_pair_key_(a, b);
     mk_pair_entry *e = find(&bp->pairs, key);
-    if (!(e && (e->state & MK_PS_LIVE) && !refiltered(bp, a, b)) && !mk_bp_filter_pass_(bp, a, b)) return MK_OK;
+    if (!(e && (e->state & MK_PS_LIVE) && !refiltered(bp, a, b)) && !mk_bp_filter_keeps_(bp, a, b)) return MK_OK;
     return push_key(bp, key);
 }
 
@@ -271,7 +271,12 @@ void mk_pairs_set_begin_(mk_bp *bp)
 
 mk_status mk_pairs_set_add_(mk_bp *bp, uint32_t a, uint32_t b)
 {
-    if (!mk_bp_filter_pass_(bp, a, b)) return MK_OK;
+    mk_pair_table *t = &bp->pairs;
+    if (!mk_bp_filter_keeps_(bp, a, b)) return MK_OK;
+    if (t->full_count < t->cap) { /* the common case, without a call */
+        t->scratch[t->full_count++] = mk_pair_key_(a, b);
+        return MK_OK;
+    }
     return push_key(bp, mk_pair_key_(a, b));
 }
 
@@ -279,7 +284,7 @@ void mk_pairs_set_end_(mk_bp *bp)
 {
     mk_pair_table *t = &bp->pairs;
     int i, n = t->full_count;
-    mk_sort_u64_(t->scratch, t->scratch2, n);
+    mk_sort_pairs_(bp, t->scratch, t->scratch2, n);
     for (i = 0; i < n; ++i) t->set[i] = pair_of(bp, t->scratch[i]);
     t->set_count = n;
     t->added_count = t->removed_count = 0;
@@ -307,7 +312,7 @@ void mk_pairs_full_end_(mk_bp *bp)
 {
     mk_pair_table *t = &bp->pairs;
     int i, n = t->full_count;
-    mk_sort_u64_(t->scratch, t->scratch2, n);
+    mk_sort_pairs_(bp, t->scratch, t->scratch2, n);
     diff_against_set(bp, t->scratch, n);
     t->count = 0;
     t->touched_count = 0;
@@ -338,7 +343,7 @@ static void finish_forgotten(mk_bp *bp)
     int i, n = 0, nd = 0;
     for (i = 0; i < t->count; ++i)
         if (t->e[i].state & MK_PS_LIVE) t->scratch[n++] = t->e[i].key;
-    mk_sort_u64_(t->scratch, t->scratch2, n);
+    mk_sort_pairs_(bp, t->scratch, t->scratch2, n);
     diff_against_set(bp, t->scratch, n);
     for (i = 0; i < t->count; ++i) {
         uint32_t st = t->e[i].state & ~(uint32_t)(MK_PS_TOUCHED | MK_PS_REPORTED);
@@ -351,6 +356,38 @@ static void finish_forgotten(mk_bp *bp)
 }
 
 void mk_sort_u64_(uint64_t *keys, uint64_t *tmp, int n) { mk_sort_u64_by_(keys, tmp, n, 0); }
+
+/* Pair keys have two slots, so a radix sort makes a pass per byte of each
+ * (four with 10k proxies). A set has a few pairs per proxy: bucketing by
+ * the lower slot (one count, one scatter) and sorting each bucket's few
+ * higher slots costs two passes instead. Buckets of many pairs (a ground
+ * plane's) are radix-sorted, so no bucket costs more than O(k) passes. */
+#define MK_SMALL_BUCKET_ 16
+static void sort_bucket(uint64_t *b, uint64_t *tmp, int k)
+{
+    int i, j;
+    if (k > MK_SMALL_BUCKET_) { mk_sort_u64_(b, tmp, k); return; }
+    for (i = 1; i < k; ++i) {
+        uint64_t v = b[i];
+        for (j = i; j > 0 && b[j - 1] > v; --j) b[j] = b[j - 1];
+        b[j] = v;
+    }
+}
+
+void mk_sort_pairs_(mk_bp *bp, uint64_t *keys, uint64_t *tmp, int n)
+{
+    uint32_t *c = bp->bucket, sum = 0, start = 0;
+    int s, i, slots = bp->hi_slot;
+    if (n < slots / 2) { mk_sort_u64_(keys, tmp, n); return; }
+    memset(c, 0, (size_t)slots * sizeof *c);
+    for (i = 0; i < n; ++i) c[keys[i] >> 32]++;
+    for (s = 0; s < slots; ++s) { uint32_t v = c[s]; c[s] = sum; sum += v; }
+    for (i = 0; i < n; ++i) tmp[c[keys[i] >> 32]++] = keys[i];
+    /* now c[s] is the end of bucket s; keys is free to serve as scratch */
+    for (s = 0; s < slots; start = c[s++])
+        if (c[s] - start > 1) sort_bucket(tmp + start, keys + start, (int)(c[s] - start));
+    memcpy(keys, tmp, (size_t)n * sizeof *keys);
+}
 
 void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte)
 {
@@ -434,8 +471,8 @@ mk_status mk_pairs_finish_(mk_bp *bp)
         if (live && !rep) t->scratch[na++] = e->key;
         else if (!live && rep) *--rem = e->key, ++nr;
     }
-    mk_sort_u64_(t->scratch, t->scratch2, na);
-    mk_sort_u64_(rem, t->scratch2, nr);
+    mk_sort_pairs_(bp, t->scratch, t->scratch2, na);
+    mk_sort_pairs_(bp, rem, t->scratch2, nr);
     for (i = 0; i < na; ++i) t->added[i] = pair_of(bp, t->scratch[i]);
     for (i = 0; i < nr; ++i) t->removed[i] = pair_of(bp, rem[i]);
     t->added_count = na;

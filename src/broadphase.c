@@ -83,6 +83,7 @@ static int proxy_arrays(mk_bp *bp, proxy_array_ *a)
     a[n].p = (void **)&bp->flags; a[n++].elem = sizeof *bp->flags;
     a[n].p = (void **)&bp->free_slots; a[n++].elem = sizeof *bp->free_slots;
     a[n].p = (void **)&bp->dirty; a[n++].elem = sizeof *bp->dirty;
+    a[n].p = (void **)&bp->bucket; a[n++].elem = sizeof *bp->bucket;
     return n;
 }
 
@@ -98,7 +99,7 @@ static void destroy_structures(mk_bp *bp)
 
 void mk_bp_destroy(mk_bp *bp)
 {
-    proxy_array_ a[9];
+    proxy_array_ a[10];
     int n, i;
     mk_allocator al;
     if (!bp) return;
@@ -125,7 +126,7 @@ mk_status mk_bp_create(const mk_bp_def *def, const mk_allocator *alloc, mk_bp **
     mk_bp_def d = def ? *def : mk_bp_default_def();
     mk_allocator al;
     mk_bp *bp;
-    proxy_array_ a[9];
+    proxy_array_ a[10];
     int n, i, pair_cap;
     mk_status st;
     if (!out) return MK_ERR_NULL;
@@ -166,10 +167,11 @@ static inline mk_status check_box(const mk_aabb *b)
     return ok ? MK_OK : MK_ERR_BAD_AABB;
 }
 
+/* && on purpose: a moved box differs in its first coordinate, almost always. */
 static inline int same_box(const mk_aabb *a, const mk_aabb *b)
 {
-    return (a->lo.x == b->lo.x) & (a->lo.y == b->lo.y) & (a->lo.z == b->lo.z) & (a->hi.x == b->hi.x) &
-           (a->hi.y == b->hi.y) & (a->hi.z == b->hi.z);
+    return a->lo.x == b->lo.x && a->lo.y == b->lo.y && a->lo.z == b->lo.z && a->hi.x == b->hi.x &&
+           a->hi.y == b->hi.y && a->hi.z == b->hi.z;
 }
 
 /* The slot of a live, not destroyed id, or -1. */
@@ -234,8 +236,9 @@ static inline mk_status move_one(mk_bp *bp, mk_bp_id id, const mk_aabb *box)
     int s;
     mk_status st;
     if ((s = slot_of(bp, id)) < 0) return MK_ERR_UNKNOWN_ID;
+    /* a resting body is not a mover; next[] passed check_box, so the same box would too */
+    if (same_box(&bp->next[s], box)) return MK_OK;
     if ((st = check_box(box)) != MK_OK) return st;
-    if (same_box(&bp->next[s], box)) return MK_OK; /* a resting body is not a mover */
     bp->next[s] = *box;
     if (bp->flags[s] & MK_PF_NEW) bp->box[s] = *box;
     else mark_dirty(bp, (uint32_t)s, MK_PF_MOVED);
@@ -375,9 +378,24 @@ static void observe_motion(mk_bp *bp)
  *    0.036 ms a step against the grid's 0.072);
  *  - many movers (over 20%), or over ~100 among mostly statics: the grid
  *    (uniform, mixed, wall, churn: 1.1 to 2.5 ms against SAP's 3.1 to 7.0;
- *    static: 0.4 ms against 4.2);
+ *    static: 0.4 ms against 4.2) -- but for a pairs_only caller with few
+ *    statics SAP, i.e. its stateless sweep, when the boxes are lined up so
+ *    that the sweep tests few boxes per proxy (sweep_is_cheap);
  *  - in between, the structure in use stays: a switch costs a rebuild. */
-static mk_bp_kind auto_choice(const mk_bp *bp, int sap_lost_coherence)
+/* Crowding, for a pairs_only caller: does a stateless sweep test few boxes
+ * per proxy? Measured (bench_broadphase, 10k): about 3 tests per proxy on
+ * boxes lined up in a corridor or a wall, where the sweep beats the grid
+ * (0.77 and 0.85 ms against 1.0 and 1.05), 26-49 on boxes filling a volume,
+ * where the grid wins by 1.9x. The count is exact and costs a sort, O(n log
+ * n), at a choice. */
+#define MK_BP_SWEEP_TESTS_PER_PROXY_ 6.0
+static int sweep_is_cheap(mk_bp *bp)
+{
+    double tests;
+    return mk_sweep_count_(bp, &tests) == MK_OK && tests <= MK_BP_SWEEP_TESTS_PER_PROXY_ * bp->live;
+}
+
+static mk_bp_kind auto_choice(mk_bp *bp, int sap_lost_coherence)
 {
     double movers = bp->moved_share * bp->live;
     int dynamic = bp->live - bp->statics, few_statics = 2 * bp->statics < bp->live;
@@ -386,7 +404,8 @@ static mk_bp_kind auto_choice(const mk_bp *bp, int sap_lost_coherence)
     if (bp->far_share >= 0.02 || sap_lost_coherence)
         return bp->def.pairs_only && few_statics ? MK_BP_SAP : MK_BP_HGRID;
     if (dynamic <= 96 || movers <= 96 || (bp->moved_share < 0.05 && few_statics)) return MK_BP_SAP;
-    if (bp->moved_share > 0.2 || !few_statics) return MK_BP_HGRID;
+    if (bp->moved_share > 0.2 || !few_statics)
+        return bp->def.pairs_only && few_statics && sweep_is_cheap(bp) ? MK_BP_SAP : MK_BP_HGRID;
     return bp->kind == MK_BP_BRUTE ? MK_BP_SAP : bp->kind;
 }
 

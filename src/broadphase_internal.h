@@ -71,6 +71,7 @@ struct mk_bp {
     uint8_t *gen, *flags;
     uint32_t *free_slots; int free_count;
     uint32_t *dirty; int dirty_count;
+    uint32_t *bucket;         /* per slot: scratch of mk_sort_pairs_ */
     mk_pair_table pairs;
     mk_status broken;         /* a failed update: rebuild the structure next time */
     int rebuild;              /* the structure must be rebuilt from scratch */
@@ -111,6 +112,11 @@ static inline int mk_bp_both_static_(const mk_bp *bp, uint32_t a, uint32_t b)
 void mk_bp_commit_(mk_bp *bp);
 /* The built-in filter words and the user callback; 1 = keep. */
 int mk_bp_filter_pass_(const mk_bp *bp, uint32_t a, uint32_t b);
+/* The same, without a call when there is no filter at all. */
+static inline int mk_bp_filter_keeps_(const mk_bp *bp, uint32_t a, uint32_t b)
+{
+    return (bp->def.filter_mode == MK_BP_FILTER_NONE && !bp->def.filter) || mk_bp_filter_pass_(bp, a, b);
+}
 
 /* ---- pair table (bp_pairs.c) ---- */
 mk_status mk_pairs_init_(mk_bp *bp, int cap);
@@ -138,6 +144,9 @@ mk_pair_entry *mk_pairs_get_(mk_bp *bp, uint32_t a, uint32_t b, mk_status *st);
 void mk_pairs_touch_(mk_bp *bp, mk_pair_entry *e);
 /* Events, set, deletion of dead entries. */
 mk_status mk_pairs_finish_(mk_bp *bp);
+/* Sort n pair keys ascending; tmp has room for n. A counting sort on the
+ * lower slot when the keys outnumber the slots enough, else radix. */
+void mk_sort_pairs_(mk_bp *bp, uint64_t *keys, uint64_t *tmp, int n);
 /* Sort n keys ascending (LSD radix); tmp has room for n. */
 void mk_sort_u64_(uint64_t *keys, uint64_t *tmp, int n);
 /* The same on the bytes from from_byte up only; ties keep their order. */
@@ -149,6 +158,10 @@ void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte);
  * first use. O(n) + one radix sort + the boxes met in the sweep. */
 mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b));
 void mk_sweep_destroy_(mk_bp *bp);
+/* The AABB tests mk_sweep_pairs_ would make on the boxes in box[], counted
+ * in O(n log n) without making them (AUTO's crowding statistic). Leaves no
+ * sweep for mk_sweep_query_ to read. */
+mk_status mk_sweep_count_(mk_bp *bp, double *tests);
 /* Region query on the boxes of the last mk_sweep_pairs_ (after a stateless
  * update): O(log n + boxes in the rows q spans that start before q ends). */
 void mk_sweep_query_(const mk_bp *bp, mk_aabb q, mk_bp_query_fn fn, void *ctx);

@@ -109,14 +109,18 @@ MK_ALWAYS_INLINE void mk_segment_params(mk_real a, mk_real e, mk_real b, mk_real
     mk_real s, t;
     if (w2 > MK_REAL(16.0) * MK_REAL_EPSILON * a * e) {
         s = mk_clamp((cu * e - b * cv) / w2, -ha, ha);
-    } else {
+    } else if (a > 0) {
         /* B's ends projected on A's line; the centre of their overlap with A. */
         mk_real p0 = (cu - b * hb) / a, p1 = (cu + b * hb) / a;
         mk_real lo = mk_max(mk_min(p0, p1), -ha), hi = mk_min(mk_max(p0, p1), ha);
         s = lo <= hi ? MK_REAL(0.5) * (lo + hi) : (mk_max(p0, p1) < -ha ? -ha : ha);
+    } else {
+        s = 0;
     }
-    t = mk_clamp((b * s - cv) / e, -hb, hb);
-    s = mk_clamp((b * t + cu) / a, -ha, ha);
+    /* A segment of zero length (its ends rounded together far from the
+     * origin) is its centre. */
+    t = e > 0 ? mk_clamp((b * s - cv) / e, -hb, hb) : 0;
+    s = a > 0 ? mk_clamp((b * t + cu) / a, -ha, ha) : 0;
     *s_out = s;
     *t_out = t;
 }

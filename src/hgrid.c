@@ -709,12 +709,13 @@ static int index_pair(uint8_t sa, uint8_t sb)
     return (ra == REG_INDEXED && rb == REG_CELLS) || (ra == REG_CELLS && rb == REG_INDEXED);
 }
 
-static uint32_t next_state(const mk_bp *bp, const struct mk_hgrid *g, uint32_t a, uint32_t b, mk_pair_entry *e)
+static uint32_t next_state(const mk_bp *bp, struct mk_hgrid *g, uint32_t a, uint32_t b, mk_pair_entry *e)
 {
     const uint32_t pair_bits = MK_PS_CAND | MK_PS_STATIC | MK_PS_LIVE | MK_PS_REJECTED;
     uint32_t s = e->state;
     uint8_t sa = g->px[a].st, sb = g->px[b].st;
     int overlap;
+    double m;
     /* A static that left the index meets its partners in cells again. */
     if ((s & MK_PS_STATIC) && !index_pair(sa, sb)) { s &= ~(uint32_t)MK_PS_STATIC; e->wake = 0; }
     if (!(sa & REG_MASK) || !(sb & REG_MASK) || !(s & (MK_PS_CAND | MK_PS_STATIC))) return s & ~pair_bits;
@@ -722,11 +723,23 @@ static uint32_t next_state(const mk_bp *bp, const struct mk_hgrid *g, uint32_t a
     if ((sa | sb) & ST_REFILTER) s &= ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED);
     else if (g->px[a].travel + g->px[b].travel < (double)e->wake) return s;
     overlap = mk_bp_overlap_(&bp->box[a], &bp->box[b]);
-    e->wake = wake_at(g->px[a].travel + g->px[b].travel, margin(&bp->box[a], &bp->box[b], overlap));
-    /* an index pair lives only while it overlaps: the queries find it again */
-    if (!overlap) return s & ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED | MK_PS_STATIC);
+    m = margin(&bp->box[a], &bp->box[b], overlap);
+    e->wake = wake_at(g->px[a].travel + g->px[b].travel, m);
+    if (!overlap) {
+        /* An index pair lives only while it overlaps: the queries find it
+         * again. The dynamic member's last query saw this static overlapping,
+         * so its static wake does not cover the gap that just opened: it
+         * must look again once it may have closed it (a box bouncing on the
+         * ground would be missed otherwise). */
+        if (s & MK_PS_STATIC) {
+            uint32_t d = (sa & REG_MASK) == REG_CELLS ? a : b;
+            double w = room_until(g->px[d].travel, m);
+            if (w < g->swake[d]) g->swake[d] = w;
+        }
+        return s & ~(uint32_t)(MK_PS_LIVE | MK_PS_REJECTED | MK_PS_STATIC);
+    }
     if (s & (MK_PS_LIVE | MK_PS_REJECTED)) return s;
-    return s | (mk_bp_filter_pass_(bp, a, b) ? MK_PS_LIVE : MK_PS_REJECTED);
+    return s | (mk_bp_filter_keeps_(bp, a, b) ? MK_PS_LIVE : MK_PS_REJECTED);
 }
 
 static void retest(mk_bp *bp, struct mk_hgrid *g, int all)
@@ -1120,7 +1133,7 @@ static int meet_static(void *c, uint32_t t, const mk_aabb *box)
     old = e->state;
     if (!(old & MK_PS_STATIC)) e->wake = 0; /* the re-test of this update sets it */
     e->state |= MK_PS_STATIC;
-    if (!(old & (MK_PS_LIVE | MK_PS_REJECTED))) e->state |= mk_bp_filter_pass_(bp, q->d, t) ? MK_PS_LIVE : MK_PS_REJECTED;
+    if (!(old & (MK_PS_LIVE | MK_PS_REJECTED))) e->state |= mk_bp_filter_keeps_(bp, q->d, t) ? MK_PS_LIVE : MK_PS_REJECTED;
     if ((e->state ^ old) & MK_PS_LIVE) mk_pairs_touch_(bp, e);
     return 1;
 }

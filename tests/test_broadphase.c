@@ -971,6 +971,40 @@ START_TEST(batch_moves_bad_input)
 }
 END_TEST
 
+/* A box resting on a static ground bounces by less than the grid's query
+ * margin: the pair must come back every time the boxes touch again (the
+ * grid once dropped an index pair on separation and did not look again). */
+START_TEST(bounce_on_static_ground)
+{
+    static const mk_real lift[] = {MK_REAL(0.03), MK_REAL(-0.01), MK_REAL(0.03), MK_REAL(-0.01), MK_REAL(0.005),
+                                   MK_REAL(-0.02), MK_REAL(0.02), MK_REAL(0.0), MK_REAL(0.01), MK_REAL(-0.01)};
+    mk_aabb ground = mk_aabb_make(mk_v3(-250, -100, -250), mk_v3(250, MK_REAL(0.02), 250));
+    int k, f;
+    for (k = 0; k < NKIND; ++k) {
+        mk_bp_def d = mk_bp_default_def();
+        mk_bp *bp;
+        mk_bp_id g, b, other;
+        d.kind = kinds[k];
+        d.pairs_only = only_pairs[k];
+        if (mk_bp_create(&d, NULL, &bp) == MK_ERR_UNSUPPORTED) continue;
+        MK_ASSERT_STATUS(mk_bp_create_proxy(bp, ground, NULL, 1, 1, 1, &g), MK_OK);
+        /* a second dynamic box far away, so the scene is not a single pair */
+        MK_ASSERT_STATUS(mk_bp_create_proxy(bp, mk_aabb_make(mk_v3(100, 5, 100), mk_v3(101, 6, 101)), NULL, 1, 1, 0, &other), MK_OK);
+        MK_ASSERT_STATUS(mk_bp_create_proxy(bp, mk_aabb_make(mk_v3(0, lift[0], 0), mk_v3(1, lift[0] + 1, 1)), NULL, 1, 1, 0, &b), MK_OK);
+        for (f = 0; f < 40; ++f) {
+            mk_real y = lift[f % 10];
+            mk_aabb box = mk_aabb_make(mk_v3(0, y, 0), mk_v3(1, y + 1, 1));
+            int np, want = y <= MK_REAL(0.02);
+            MK_ASSERT_STATUS(mk_bp_move_proxy(bp, b, box), MK_OK);
+            MK_ASSERT_STATUS(mk_bp_update(bp), MK_OK);
+            mk_bp_pairs(bp, &np);
+            ck_assert_msg(np == want, "%s: frame %d, box at y %g: %d pairs, want %d", name_of(k), f, (double)y, np, want);
+        }
+        mk_bp_destroy(bp);
+    }
+}
+END_TEST
+
 static Suite *broadphase_suite(void)
 {
     Suite *s = suite_create("broadphase");
@@ -998,6 +1032,7 @@ static Suite *broadphase_suite(void)
     tcase_add_test(tc, fixed_capacity_overflow_recovers);
     tcase_add_test(tc, batch_moves_match_single_moves);
     tcase_add_test(tc, batch_moves_bad_input);
+    tcase_add_test(tc, bounce_on_static_ground);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -2,7 +2,12 @@
 // btPersistentManifold (see contact_writer.h for the contract).
 #include "contact_writer.h"
 
+#include <new>
+#include <type_traits>
+
 namespace mkb {
+
+static_assert(std::is_trivially_destructible<btManifoldPoint>::value, "write_contacts never destroys its points");
 
 namespace {
 
@@ -45,13 +50,15 @@ struct Tangents {
 };
 
 // The point btManifoldResult::addContactPoint would build, with the feature
-// keys in the part ids (body 0 / body 1 of the manifold).
-btManifoldPoint make_point(const btTransform &t0, const btTransform &t1, bool swapped, int index0, int index1,
-                           const Material &mat, Tangents *tangents, const PairContact &c)
+// keys in the part ids (body 0 / body 1 of the manifold), constructed in
+// place: a btManifoldPoint is some 300 bytes, and building four by default
+// and copying each in cost more than the rest of the writer.
+void make_point(void *at, const btTransform &t0, const btTransform &t1, bool swapped, int index0, int index1,
+                const Material &mat, Tangents *tangents, const PairContact &c)
 {
     const btVector3 point_a = c.point_on_b + c.normal_on_b * c.distance;
     const btTransform &ta = swapped ? t1 : t0, &tb = swapped ? t0 : t1;
-    btManifoldPoint p(ta.invXform(point_a), tb.invXform(c.point_on_b), c.normal_on_b, c.distance);
+    btManifoldPoint &p = *new (at) btManifoldPoint(ta.invXform(point_a), tb.invXform(c.point_on_b), c.normal_on_b, c.distance);
     p.m_positionWorldOnA = point_a;
     p.m_positionWorldOnB = c.point_on_b;
     p.m_combinedFriction = mat.friction;
@@ -68,7 +75,6 @@ btManifoldPoint make_point(const btTransform &t0, const btTransform &t1, bool sw
     p.m_partId1 = swapped ? c.feature_a : c.feature_b;
     p.m_index0 = swapped ? index1 : index0;
     p.m_index1 = swapped ? index0 : index1;
-    return p;
 }
 
 bool same_key(const btManifoldPoint &a, const btManifoldPoint &b)
@@ -97,14 +103,21 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
     const Material mat = material_of(o0, o1);
     Tangents tangents;
 
-    btManifoldPoint fresh[MANIFOLD_CACHE_SIZE];
+    // Raw storage: only the points written are constructed (trivially
+    // destructible, so nothing to destroy).
+    union Storage {
+        unsigned char bytes[MANIFOLD_CACHE_SIZE * sizeof(btManifoldPoint)];
+        btVector3 align;
+        Storage() {}
+    } storage;
+    btManifoldPoint *fresh = reinterpret_cast<btManifoldPoint *>(storage.bytes);
     int slot_of[MANIFOLD_CACHE_SIZE];  // cached slot matched by fresh[i], or -1
     bool slot_used[MANIFOLD_CACHE_SIZE] = {false, false, false, false};
     int n = 0;
     for (int i = 0; i < count; i++) {
         if (points[i].distance > threshold) continue;
-        fresh[n] = make_point(o0->getWorldTransform(), o1->getWorldTransform(), swapped, w0->m_index, w1->m_index,
-                              mat, &tangents, points[i]);
+        make_point(&fresh[n], o0->getWorldTransform(), o1->getWorldTransform(), swapped, w0->m_index, w1->m_index,
+                   mat, &tangents, points[i]);
         slot_of[n] = -1;
         for (int s = 0; s < m->getNumContacts(); s++) {
             if (!slot_used[s] && same_key(m->getContactPoint(s), fresh[n])) {

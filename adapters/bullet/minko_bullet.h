@@ -6,7 +6,9 @@
 // onto Minko shapes exactly, the way Bullet's own support functions define
 // them: a btBoxShape is the sharp box of its half extents (the margin is inside
 // them), a btConvexHullShape, btCylinderShape or btConeShape is its margin-free
-// core grown by the collision margin (Minko's rounding radius), spheres and
+// core grown by the collision margin (Minko's rounding radius; but two hulls
+// that both have polyhedral features meet as their margin-free cores, as in
+// Bullet's own hull-hull clipping), spheres and
 // capsules are their radius around a point or segment; capsule, cylinder and
 // cone axes (X, Y or Z) are carried by a fixed rotation from Minko's local z.
 // Shapes Minko does not model (meshes, compounds, ...) are refused with
@@ -150,7 +152,11 @@ private:
 // pair when its algorithm is created. Each Minko algorithm writes the whole
 // manifold every step in Bullet's conventions (normal on B pointing from B to
 // A, point on B, negative distance = penetration, points up to the manifold's
-// contact breaking threshold apart kept as speculative contacts) and matches
+// contact breaking threshold apart kept as speculative contacts, except for
+// box-box pairs, which report touching points only, as Bullet's
+// btBoxBoxDetector does), runs mk_collide in MK_MANIFOLD_BEST_FACE mode (the
+// minimum-penetration face every frame, as Bullet's own algorithms report)
+// and matches
 // points to the cached ones by Minko feature ID, so m_appliedImpulse follows
 // its contact (a point whose features changed in place is matched by
 // position, as Bullet matches; points not reported stay until Bullet's

@@ -1046,6 +1046,11 @@ START_TEST(np_conventions_match_bullet)
     hull.recalcLocalAabb();
     btConvexHullShape sharp_hull(&hull.getPoints()[0].getX(), hull.getNumPoints(), sizeof(btVector3));
     sharp_hull.setMargin(0);  // the sharp core: Minko's polytope path without rounding
+    // With polyhedral features Bullet's hull-hull algorithm clips the
+    // margin-free cores; the adapter does as Bullet (hull-plane, hull-box:
+    // GJK, the solid grown by the margin).
+    btConvexHullShape poly_hull(&hull.getPoints()[0].getX(), hull.getNumPoints(), sizeof(btVector3));
+    poly_hull.initializePolyhedralFeatures();
     struct Case {
         const char *name;
         btCollisionShape *a, *b;
@@ -1062,6 +1067,7 @@ START_TEST(np_conventions_match_bullet)
         {"hull-box", &hull, &box, false, false},           {"hull-hull", &hull, &hull, false, false},
         {"sharp hull-box", &sharp_hull, &box, false, false}, {"sharp hull-hull", &sharp_hull, &sharp_hull, false, false},
         {"sharp hull-plane", &sharp_hull, &plane, false, false},
+        {"polyhedral hull-hull", &poly_hull, &poly_hull, false, false}, {"polyhedral hull-box", &poly_hull, &box, false, false},
     };
     mk_rng rng = {777};
     int compared = 0;
@@ -1084,7 +1090,8 @@ START_TEST(np_conventions_match_bullet)
                 if (have_ref) ref = *deepest(r);
                 tol = kContactTol;
             } else {
-                have_ref = oracle_reference(c.a, xa, c.b, xb, &ref);
+                const bool cores = c.a == &poly_hull && c.b == &poly_hull;
+                have_ref = oracle_reference(cores ? &sharp_hull : c.a, xa, cores ? &sharp_hull : c.b, xb, &ref);
                 tol = kContactTol;
             }
             const PointOut *g = deepest(got);
@@ -1130,7 +1137,8 @@ bool gap_of(const btCollisionShape *a, const btTransform &xa, const btCollisionS
 // conservative for the rest, so at a gap of 0.9 times the manifold's contact
 // breaking threshold (placed by bisection on the exact distance, along
 // random directions) the algorithm reports as many points as mk_collide
-// itself, the deepest no farther apart than the gap.
+// itself, the deepest no farther apart than the gap; box-box pairs, which
+// report touching points only, none.
 START_TEST(np_near_pairs_never_skipped)
 {
     mkb::CollisionConfiguration mine;
@@ -1180,9 +1188,13 @@ START_TEST(np_near_pairs_never_skipped)
                 ck_assert_int_eq(mk_collide(&ma.shape, mkb::minko_pose(xa, ma), &mb.shape, mkb::minko_pose(xb, mb),
                                             (mk_real)(gap / 0.9), nullptr, &direct),
                                  MK_OK);
-                ck_assert_msg((int)got.size() == direct.count, "shapes %d-%d case %d: gap %g, %d points, mk_collide %d",
-                              a->getShapeType(), b->getShapeType(), k, ref.distance, (int)got.size(), direct.count);
-                if (direct.count > 0) {
+                // Box-box pairs keep touching points only (as btBoxBoxDetector): none at this gap.
+                int expected = direct.count;
+                if (a->getShapeType() == BOX_SHAPE_PROXYTYPE && b->getShapeType() == BOX_SHAPE_PROXYTYPE)
+                    for (int j = 0; j < direct.count; j++) expected -= direct.points[j].depth < 0;
+                ck_assert_msg((int)got.size() == expected, "shapes %d-%d case %d: gap %g, %d points, expected %d (mk_collide %d)",
+                              a->getShapeType(), b->getShapeType(), k, ref.distance, (int)got.size(), expected, direct.count);
+                if (expected > 0) {
                     ck_assert(deepest(got)->distance <= ref.distance + 1e-4);
                     reported++;
                 }
@@ -1299,6 +1311,71 @@ START_TEST(np_shape_changes_seen)
     ck_assert_int_eq(config.stats.minko_algorithms.load(), 1);  // the same pair algorithm all along
     world.removeRigidBody(&b);
     world.removeRigidBody(&ground);
+}
+END_TEST
+
+std::vector<btManifoldPoint> g_written;  // points written this frame (gContactAddedCallback)
+bool record_written(btManifoldPoint &p, const btCollisionObjectWrapper *, int, int, const btCollisionObjectWrapper *, int, int)
+{
+    g_written.push_back(p);
+    return false;
+}
+
+// Bullet's pairs run mk_collide in the minimum-penetration-face mode: a
+// pair algorithm kept warm over frames reports, every frame, the normal and
+// depth a cold call gives (no face kind held from the last frame). Two
+// equal boxes stacked and rocking, the upper one's tilt changing sign, is
+// the case where the ID-stable mode would keep last frame's face.
+START_TEST(np_warm_pairs_take_the_best_face)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btBoxShape box(btVector3(1, 1, 1));
+    btCollisionObject lower, upper;
+    lower.setCollisionShape(&box);
+    upper.setCollisionShape(&box);
+    upper.setCollisionFlags(upper.getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+    ContactAddedCallback saved = gContactAddedCallback;
+    gContactAddedCallback = record_written;
+    btTransform xl(btQuaternion(btVector3(0, 0, 1), btScalar(0.01)), btVector3(0, 0, 0));
+    lower.setWorldTransform(xl);
+    btCollisionObjectWrapper wl(nullptr, &box, &lower, xl, -1, -1);
+    btCollisionAlgorithm *algo = nullptr;
+    int compared = 0;
+    for (int k = 0; k < 40; k++) {
+        // The upper box's tilt swings between -0.03 and +0.03 rad: its own
+        // bottom face and the lower box's top face take turns being the
+        // shallower axis.
+        const btScalar tilt = btScalar(0.03 * std::sin(0.7 * k));
+        btTransform xu(btQuaternion(btVector3(0, 0, 1), tilt), btVector3(btScalar(0.05), btScalar(1.99), 0));
+        upper.setWorldTransform(xu);
+        btCollisionObjectWrapper wu(nullptr, &box, &upper, xu, -1, -1);
+        if (!algo) algo = dispatcher.findAlgorithm(&wl, &wu, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+        btManifoldResult result(&wl, &wu);
+        btDispatcherInfo info;
+        g_written.clear();
+        algo->processCollision(&wl, &wu, info, &result);
+        btManifoldArray manifolds;
+        algo->getAllContactManifolds(manifolds);
+        ck_assert_int_eq(manifolds.size(), 1);
+        const btPersistentManifold *m = manifolds[0];
+        const btManifoldPoint *warm = nullptr;
+        for (const btManifoldPoint &p : g_written)
+            if (!warm || p.getDistance() < warm->getDistance()) warm = &p;
+        std::vector<PointOut> cold = collide_once(&config, &box, xl, &box, xu);
+        const PointOut *c = deepest(cold);
+        ck_assert(c != nullptr && warm != nullptr);
+        const btVector3 n = m->getBody0() == &lower ? warm->m_normalWorldOnB : -warm->m_normalWorldOnB;
+        ck_assert_msg(n.dot(c->normal_on_b) >= 1 - kNormalTol, "frame %d: warm normal %g %g %g, cold %g %g %g", k,
+                      (double)n.x(), (double)n.y(), (double)n.z(), (double)c->normal_on_b.x(),
+                      (double)c->normal_on_b.y(), (double)c->normal_on_b.z());
+        MK_ASSERT_NEAR(warm->getDistance(), c->distance, kContactTol);
+        compared++;
+    }
+    ck_assert_int_eq(compared, 40);
+    gContactAddedCallback = saved;
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
 }
 END_TEST
 
@@ -1508,6 +1585,7 @@ Suite *suite()
     tcase_add_test(n, np_near_pairs_never_skipped);
     tcase_add_test(n, np_world_rests_on_minko_contacts);
     tcase_add_test(n, np_shape_changes_seen);
+    tcase_add_test(n, np_warm_pairs_take_the_best_face);
     tcase_add_test(n, np_switch_at_run_time);
     suite_add_tcase(s, n);
     TCase *c = tcase_create("ccd");

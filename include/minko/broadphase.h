@@ -22,7 +22,8 @@
  * the pair set and the grid's cell pool grow by doubling inside mk_bp_update()
  * only when they overflow (never in a steady state; a fixed-size mode refuses
  * with MK_ERR_CAPACITY instead), and AUTO allocates the structure it switches
- * to (stats.switches counts that). An update that fails leaves the broadphase
+ * to (stats.switches counts that) and, for a pairs_only caller, the sweep's
+ * scratch (about 40 B per proxy) with which it measures crowding. An update that fails leaves the broadphase
  * valid: the next successful update rebuilds what was missed. Queries (region,
  * ray, stats) never allocate and never change the broadphase, so several
  * threads may query at once; no other call is thread-safe.
@@ -43,10 +44,15 @@
  *                spread is swept, the next one cut into rows as tall as the
  *                tallest box, one radix sort of n keys, and each box meets
  *                the boxes of its own and the next row that overlap it on
- *                the swept axis: O(n + those meetings + p log p); a box
+ *                the swept axis: O(n + those meetings + p) (the pairs are
+ *                bucketed by their lower slot to sort them); a box
  *                infinite across the rows (a plane) meets every box, O(n);
- *                statics are sorted every time too. Statics sit in SAP's
- *                axes like everyone else. Region query O(log n + proxies in
+ *                statics are sorted every time too. Crowding, as AUTO
+ *                reads it: the tests a sweep would make, counted in O(n log
+ *                n) without making them; few per proxy (boxes lined up in a
+ *                corridor or a wall: about 3) and the sweep beats the grid,
+ *                many (boxes filling a volume: 26-49) and it loses by about
+ *                2x. Statics sit in SAP's axes like everyone else. Region query O(log n + proxies in
  *                the x slab); after a stateless update, O(log n + the boxes
  *                of the rows the query spans that start before it ends).
  *   hash grid    update O(d + candidates with a moved member + cell changes
