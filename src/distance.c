@@ -274,21 +274,45 @@ static int corner_certified(const mk_pair *p, int side, int c, mk_real tol, mk_r
     return 1;
 }
 
+/* A box centre t plus the signed half-axes e0, e1, e2 of corner c. */
+MK_ALWAYS_INLINE mk_vec3 corner_from_axes(mk_vec3 t, mk_vec3 e0, mk_vec3 e1, mk_vec3 e2, int c)
+{
+    return mk_v3_add(mk_v3_add(mk_v3_add(t, c & 1 ? e0 : mk_v3_neg(e0)), c & 2 ? e1 : mk_v3_neg(e1)), c & 4 ? e2 : mk_v3_neg(e2));
+}
+
+/* Squared distance of a point x from a box core of half extents h. */
+MK_ALWAYS_INLINE mk_real box_gap2(mk_vec3 h, mk_vec3 x) { return mk_v3_len2(mk_v3_sub(x, mk_box_clamp(h, x))); }
+
+/* Which of the sixteen corners (B's: side 0, A's: side 1) is nearest the
+ * other box. Each corner is compared in the other box's frame (rotations
+ * keep lengths), built from the centre and three rotated half-axes computed
+ * once: no rotation per corner. Ties keep the first, as corner_pair's order. */
+static void nearest_corner(const mk_pair *p, int *side, int *corner)
+{
+    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, ta = mk_v3_neg(mk_mat3_tmul_v3(p->r, p->t));
+    mk_mat3 rt = mk_mat3_transpose(p->r);
+    mk_vec3 e0 = mk_v3_scale(p->r.c0, hb.x), e1 = mk_v3_scale(p->r.c1, hb.y), e2 = mk_v3_scale(p->r.c2, hb.z);
+    mk_vec3 f0 = mk_v3_scale(rt.c0, ha.x), f1 = mk_v3_scale(rt.c1, ha.y), f2 = mk_v3_scale(rt.c2, ha.z);
+    mk_real best = MK_REAL_MAX;
+    int c;
+    for (c = 0; c < 8; ++c) {
+        mk_real lb = box_gap2(ha, corner_from_axes(p->t, e0, e1, e2, c)), la = box_gap2(hb, corner_from_axes(ta, f0, f1, f2, c));
+        if (lb < best) best = lb, *side = 0, *corner = c;
+        if (la < best) best = la, *side = 1, *corner = c;
+    }
+}
+
 /* Certifies vertex-edge and vertex-vertex contacts, which no SAT axis
  * realises: the corners supporting SAT's best axis n first (usually the
  * answer), then the corner nearest the other box among all sixteen (sixteen
  * clamps, still far cheaper than GJK). */
 static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
 {
-    int c, fa = -1, fb = -1, side = 0, corner = 0;
-    mk_real best = MK_REAL_MAX;
+    int fa = -1, fb = -1, side = 0, corner = 0;
     mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &fa);
     mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &fb);
     if (corner_certified(p, 0, fb, tol, d, pa, pb) || corner_certified(p, 1, fa, tol, d, pa, pb)) return 1;
-    for (c = 0; c < 16; ++c) {
-        mk_real l2 = corner_pair(p, c & 1, c >> 1, pa, pb);
-        if (l2 < best) best = l2, side = c & 1, corner = c >> 1;
-    }
+    nearest_corner(p, &side, &corner);
     return corner_certified(p, side, corner, tol, d, pa, pb);
 }
 
@@ -435,8 +459,21 @@ MK_ALWAYS_INLINE void spheres(const mk_shape *a, const mk_pose *xa, const mk_sha
 MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, int flip,
                                  mk_distance_result *r)
 {
-    mk_hit h = mk_closest_box_sphere(a->u.half_extents, a->radius, mk_mat3_tmul_v3(xa->r, mk_v3_sub(xb->p, xa->p)), b->radius);
-    put_framed(&h, &xa->r, xa->p, flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+    /* mk_closest_box_sphere's steps, answered in world space: the gap v and
+     * the box point q are rotated back beside the square root and the
+     * division, the long part of the chain, rather than after them. */
+    const mk_mat3 *ra = &xa->r;
+    mk_vec3 h = a->u.half_extents, c = mk_mat3_tmul_v3(*ra, mk_v3_sub(xb->p, xa->p)), q = mk_box_clamp(h, c), v = mk_v3_sub(c, q);
+    mk_vec3 vw = mk_mat3_mul_v3(*ra, v), qw = mk_v3_add(mk_mat3_mul_v3(*ra, q), xa->p), n;
+    mk_real l, s = mk_inv_len(mk_v3_len2(v), &l);
+    if (l > 0) {
+        n = mk_v3_scale(vw, s);
+    } else { /* centre inside the core: leave through the nearest face */
+        l = -mk_box_exit(h, c, &n, &q);
+        n = mk_mat3_mul_v3(*ra, n);
+        qw = mk_v3_add(mk_mat3_mul_v3(*ra, q), xa->p);
+    }
+    put(l - a->radius - b->radius, n, mk_v3_mad(qw, a->radius, n), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
 MK_ALWAYS_INLINE void capsule_sphere(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
