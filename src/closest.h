@@ -50,10 +50,35 @@ MK_ALWAYS_INLINE mk_real mk_inv_len(mk_real l2, mk_real *len)
  * (callers pick their own direction). */
 MK_ALWAYS_INLINE mk_vec3 mk_unit_len(mk_vec3 v, mk_real *len) { return mk_v3_scale(v, mk_inv_len(mk_v3_len2(v), len)); }
 
-/* The point of a box core of half extents h nearest x (box frame). */
+/* The point of a box core of half extents h nearest x (box frame). As
+ * max(-h, min(x, h)), which compiles to minsd/maxsd: mk_clamp's nested
+ * conditional compiles to branches, and on a query's random relative poses
+ * those mispredict about half the time (x is finite here). */
 MK_ALWAYS_INLINE mk_vec3 mk_box_clamp(mk_vec3 h, mk_vec3 x)
 {
-    return mk_v3(mk_clamp(x.x, -h.x, h.x), mk_clamp(x.y, -h.y, h.y), mk_clamp(x.z, -h.z, h.z));
+    return mk_v3(mk_max(-h.x, mk_min(x.x, h.x)), mk_max(-h.y, mk_min(x.y, h.y)), mk_max(-h.z, mk_min(x.z, h.z)));
+}
+
+/* For a point c inside a box core of half extents h: the face it leaves
+ * through soonest, as its outward unit normal *n and the point *q of that
+ * face nearest c; returns the depth h_k - |c_k| >= 0. Ties go to x, then y. */
+MK_ALWAYS_INLINE mk_real mk_box_exit(mk_vec3 h, mk_vec3 c, mk_vec3 *n, mk_vec3 *q)
+{
+    mk_real gx = h.x - mk_fabs_(c.x), gy = h.y - mk_fabs_(c.y), gz = h.z - mk_fabs_(c.z);
+    *q = c;
+    if (gx <= gy && gx <= gz) {
+        *n = mk_v3(c.x >= 0 ? 1 : -1, 0, 0);
+        q->x = c.x >= 0 ? h.x : -h.x;
+        return gx;
+    }
+    if (gy <= gz) {
+        *n = mk_v3(0, c.y >= 0 ? 1 : -1, 0);
+        q->y = c.y >= 0 ? h.y : -h.y;
+        return gy;
+    }
+    *n = mk_v3(0, 0, c.z >= 0 ? 1 : -1);
+    q->z = c.z >= 0 ? h.z : -h.z;
+    return gz;
 }
 
 /* A box core of half extents h, rounded by ra, against a sphere of radius
@@ -61,26 +86,11 @@ MK_ALWAYS_INLINE mk_vec3 mk_box_clamp(mk_vec3 h, mk_vec3 x)
 MK_ALWAYS_INLINE mk_hit mk_closest_box_sphere(mk_vec3 h, mk_real ra, mk_vec3 c, mk_real rb)
 {
     mk_vec3 q = mk_box_clamp(h, c), n;
-    mk_real l, gx, gy, gz, g;
+    mk_real l, g;
     n = mk_unit_len(mk_v3_sub(c, q), &l);
     if (l > 0) return mk_hit_grow(q, c, l, n, ra, rb);
     /* Centre inside the core: leave through the nearest face. */
-    gx = h.x - mk_fabs_(c.x);
-    gy = h.y - mk_fabs_(c.y);
-    gz = h.z - mk_fabs_(c.z);
-    if (gx <= gy && gx <= gz) {
-        g = gx;
-        n = mk_v3(c.x >= 0 ? 1 : -1, 0, 0);
-        q.x = c.x >= 0 ? h.x : -h.x;
-    } else if (gy <= gz) {
-        g = gy;
-        n = mk_v3(0, c.y >= 0 ? 1 : -1, 0);
-        q.y = c.y >= 0 ? h.y : -h.y;
-    } else {
-        g = gz;
-        n = mk_v3(0, 0, c.z >= 0 ? 1 : -1);
-        q.z = c.z >= 0 ? h.z : -h.z;
-    }
+    g = mk_box_exit(h, c, &n, &q);
     return mk_hit_grow(q, c, -g, n, ra, rb);
 }
 
@@ -109,14 +119,18 @@ MK_ALWAYS_INLINE void mk_segment_params(mk_real a, mk_real e, mk_real b, mk_real
     mk_real s, t;
     if (w2 > MK_REAL(16.0) * MK_REAL_EPSILON * a * e) {
         s = mk_clamp((cu * e - b * cv) / w2, -ha, ha);
-    } else {
+    } else if (a > 0) {
         /* B's ends projected on A's line; the centre of their overlap with A. */
         mk_real p0 = (cu - b * hb) / a, p1 = (cu + b * hb) / a;
         mk_real lo = mk_max(mk_min(p0, p1), -ha), hi = mk_min(mk_max(p0, p1), ha);
         s = lo <= hi ? MK_REAL(0.5) * (lo + hi) : (mk_max(p0, p1) < -ha ? -ha : ha);
+    } else {
+        s = 0;
     }
-    t = mk_clamp((b * s - cv) / e, -hb, hb);
-    s = mk_clamp((b * t + cu) / a, -ha, ha);
+    /* A segment of zero length (its ends rounded together far from the
+     * origin) is its centre. */
+    t = e > 0 ? mk_clamp((b * s - cv) / e, -hb, hb) : 0;
+    s = a > 0 ? mk_clamp((b * t + cu) / a, -ha, ha) : 0;
     *s_out = s;
     *t_out = t;
 }

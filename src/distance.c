@@ -1,5 +1,6 @@
 /* distance.c: public pair queries: validation, the dispatch table, GJK + EPA composition. */
 #include "closest.h"
+#include "pose.h"
 #ifndef MK_WITHOUT_EPA
 #  include "epa.h"
 #endif
@@ -15,52 +16,55 @@ const char *mk_method_name(mk_method m)
 
 /* ---- validation ----------------------------------------------------------- */
 
-/* Names the first thing wrong with a pose: non-finite numbers, then a
- * quaternion that is not unit within MK_QUAT_TOLERANCE. */
-static mk_status check_pose(const mk_transform *x)
-{
-    mk_quat q = x->q;
-    if (!mk_v3_is_valid(x->p) || !mk_real_is_valid(q.x) || !mk_real_is_valid(q.y) || !mk_real_is_valid(q.z) ||
-        !mk_real_is_valid(q.w))
-        return MK_ERR_NOT_FINITE;
-    return mk_quat_is_valid(q) ? MK_OK : MK_ERR_BAD_ROTATION;
-}
-
-/* The slow half of validation: names the first error in argument order.
- * Called only on input the quick test below refused; the two accept exactly
- * the same input (tests/test_distance.c, quick_test_matches_diagnosis), so
- * it never returns MK_OK to a method that would then skip its answer. */
-static MK_NOINLINE mk_status diagnose(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb)
+/* The slow half of validation: names the first error in argument order
+ * (shapes, then poses). Called only on input the quick test below refused;
+ * the two accept exactly the same input (tests/test_distance.c,
+ * quick_test_matches_diagnosis), so it never returns MK_OK to a method that
+ * would then skip its answer. */
+static MK_NOINLINE mk_status diagnose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb)
 {
     mk_status st;
     if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
-    if ((st = check_pose(xa)) != MK_OK) return st;
-    return check_pose(xb);
+    return mk_pose_ok_(xa) && mk_pose_ok_(xb) ? MK_OK : MK_ERR_UNCHECKED_POSE;
 }
 
 /* The quick test every query pays, for two shapes of types ta, tb: no call
- * and, when ta and tb are constants, no switch. v - v is +0 for a finite v
- * and NaN otherwise, so f is 0 exactly when the positions are finite, and
- * adding it to |q|^2 - 1 folds that test into the unit-quaternion tests,
- * which a NaN or infinite quaternion fails too. A quaternion within
- * MK_QUAT_TOLERANCE is accepted; paths that use it rotate by the exact
- * rotation it stands for (mk_rotation_of). */
-MK_ALWAYS_INLINE int accept(const mk_shape *a, mk_shape_type ta, const mk_transform *xa, const mk_shape *b, mk_shape_type tb,
-                            const mk_transform *xb)
+ * and, when ta and tb are constants, no switch. The poses were checked when
+ * they were made; here only their tags are read. */
+MK_ALWAYS_INLINE int accept(const mk_shape *a, mk_shape_type ta, const mk_pose *xa, const mk_shape *b, mk_shape_type tb,
+                            const mk_pose *xb)
 {
-    mk_real f = (xa->p.x - xa->p.x) + (xa->p.y - xa->p.y) + (xa->p.z - xa->p.z) + (xb->p.x - xb->p.x) + (xb->p.y - xb->p.y) +
-                (xb->p.z - xb->p.z);
-    return mk_shape_ok_typed_(a, ta) && mk_shape_ok_typed_(b, tb) &&
-           mk_fabs_(mk_quat_len2(xa->q) - 1 + f) <= MK_QUAT_TOLERANCE && mk_fabs_(mk_quat_len2(xb->q) - 1 + f) <= MK_QUAT_TOLERANCE;
+    return mk_shape_ok_typed_(a, ta) && mk_shape_ok_typed_(b, tb) && mk_pose_ok_(xa) && mk_pose_ok_(xb);
 }
 
 /* Validation of two non-NULL shapes of any type and their poses. */
-static mk_status check(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb)
+static mk_status check(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb)
 {
     return (unsigned)a->type < MK_SHAPE_TYPE_COUNT && (unsigned)b->type < MK_SHAPE_TYPE_COUNT &&
                    accept(a, a->type, xa, b, b->type, xb)
                ? MK_OK
                : diagnose(a, xa, b, xb);
+}
+
+/* The mk_transform entry points: both transforms checked (in argument
+ * order after the shapes, as the contract names errors) and converted to
+ * poses for the one implementation of each query. */
+static MK_NOINLINE mk_status diagnose_transforms(const mk_shape *a, const mk_transform *xa, const mk_shape *b,
+                                                 const mk_transform *xb)
+{
+    mk_status st;
+    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
+    if ((st = mk_transform_check_(*xa)) != MK_OK) return st;
+    return mk_transform_check_(*xb);
+}
+
+MK_ALWAYS_INLINE mk_status poses_of(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb, mk_pose *pa,
+                                    mk_pose *pb)
+{
+    if (!mk_transform_ok_(xa) || !mk_transform_ok_(xb)) return diagnose_transforms(a, xa, b, xb);
+    mk_pose_set_(pa, xa);
+    mk_pose_set_(pb, xb);
+    return MK_OK;
 }
 
 /* ---- the iterative path ----------------------------------------------------- */
@@ -270,21 +274,45 @@ static int corner_certified(const mk_pair *p, int side, int c, mk_real tol, mk_r
     return 1;
 }
 
+/* A box centre t plus the signed half-axes e0, e1, e2 of corner c. */
+MK_ALWAYS_INLINE mk_vec3 corner_from_axes(mk_vec3 t, mk_vec3 e0, mk_vec3 e1, mk_vec3 e2, int c)
+{
+    return mk_v3_add(mk_v3_add(mk_v3_add(t, c & 1 ? e0 : mk_v3_neg(e0)), c & 2 ? e1 : mk_v3_neg(e1)), c & 4 ? e2 : mk_v3_neg(e2));
+}
+
+/* Squared distance of a point x from a box core of half extents h. */
+MK_ALWAYS_INLINE mk_real box_gap2(mk_vec3 h, mk_vec3 x) { return mk_v3_len2(mk_v3_sub(x, mk_box_clamp(h, x))); }
+
+/* Which of the sixteen corners (B's: side 0, A's: side 1) is nearest the
+ * other box. Each corner is compared in the other box's frame (rotations
+ * keep lengths), built from the centre and three rotated half-axes computed
+ * once: no rotation per corner. Ties keep the first, as corner_pair's order. */
+static void nearest_corner(const mk_pair *p, int *side, int *corner)
+{
+    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, ta = mk_v3_neg(mk_mat3_tmul_v3(p->r, p->t));
+    mk_mat3 rt = mk_mat3_transpose(p->r);
+    mk_vec3 e0 = mk_v3_scale(p->r.c0, hb.x), e1 = mk_v3_scale(p->r.c1, hb.y), e2 = mk_v3_scale(p->r.c2, hb.z);
+    mk_vec3 f0 = mk_v3_scale(rt.c0, ha.x), f1 = mk_v3_scale(rt.c1, ha.y), f2 = mk_v3_scale(rt.c2, ha.z);
+    mk_real best = MK_REAL_MAX;
+    int c;
+    for (c = 0; c < 8; ++c) {
+        mk_real lb = box_gap2(ha, corner_from_axes(p->t, e0, e1, e2, c)), la = box_gap2(hb, corner_from_axes(ta, f0, f1, f2, c));
+        if (lb < best) best = lb, *side = 0, *corner = c;
+        if (la < best) best = la, *side = 1, *corner = c;
+    }
+}
+
 /* Certifies vertex-edge and vertex-vertex contacts, which no SAT axis
  * realises: the corners supporting SAT's best axis n first (usually the
  * answer), then the corner nearest the other box among all sixteen (sixteen
  * clamps, still far cheaper than GJK). */
 static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
 {
-    int c, fa = -1, fb = -1, side = 0, corner = 0;
-    mk_real best = MK_REAL_MAX;
+    int fa = -1, fb = -1, side = 0, corner = 0;
     mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &fa);
     mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &fb);
     if (corner_certified(p, 0, fb, tol, d, pa, pb) || corner_certified(p, 1, fa, tol, d, pa, pb)) return 1;
-    for (c = 0; c < 16; ++c) {
-        mk_real l2 = corner_pair(p, c & 1, c >> 1, pa, pb);
-        if (l2 < best) best = l2, side = c & 1, corner = c >> 1;
-    }
+    nearest_corner(p, &side, &corner);
     return corner_certified(p, side, corner, tol, d, pa, pb);
 }
 
@@ -350,15 +378,22 @@ static int box_box_sat(const mk_pair *p, answer *ans)
         n = s.normal;
         if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
         if (s.kind == MK_SAT_EDGES) { /* the closest points of the two supporting edges */
-            mk_vec3 a0, a1, b0, b1;
+            mk_vec3 a0, a1, b0, b1, ua, ub, ca, cb, c;
             mk_real u, v;
             box_support_edge(ha, n, &a0, &a1);
             box_support_edge(hb, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &b0, &b1);
-            b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
-            b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
-            mk_segment_segment(a0, a1, b0, b1, &u, &v);
-            pa = mk_v3_lerp(a0, a1, u);
-            pb = mk_v3_lerp(b0, b1, v);
+            /* Centres and half-edges, B's rotated before its offset is added: an
+             * edge tiny next to the distance keeps its direction (its ends
+             * would round together). */
+            ua = mk_v3_scale(mk_v3_sub(a1, a0), MK_REAL(0.5));
+            ca = mk_v3_scale(mk_v3_add(a0, a1), MK_REAL(0.5));
+            ub = mk_mat3_mul_v3(p->r, mk_v3_scale(mk_v3_sub(b1, b0), MK_REAL(0.5)));
+            cb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_v3_scale(mk_v3_add(b0, b1), MK_REAL(0.5))), p->t);
+            c = mk_v3_sub(cb, ca);
+            mk_segment_params(mk_v3_len2(ua), mk_v3_len2(ub), mk_v3_dot(ua, ub), mk_v3_dot(c, ua), mk_v3_dot(c, ub),
+                              mk_v3_len2(mk_v3_cross(ua, ub)), 1, 1, &u, &v);
+            pa = mk_v3_mad(ca, u, ua);
+            pb = mk_v3_mad(cb, v, ub);
             ok = mk_v3_max_abs(mk_v3_sub(mk_v3_sub(pb, pa), mk_v3_scale(n, d))) <= tol;
         }
         /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
@@ -411,7 +446,7 @@ MK_ALWAYS_INLINE void put_aligned(mk_hit h, mk_vec3 pa, int flip, mk_distance_re
 
 /* The closed forms read only the parts of the poses their pair uses: the
  * centres, a capsule's axis, a box's rotation. */
-MK_ALWAYS_INLINE void spheres(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+MK_ALWAYS_INLINE void spheres(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                               mk_distance_result *r)
 {
     mk_real l;
@@ -421,27 +456,39 @@ MK_ALWAYS_INLINE void spheres(const mk_shape *a, const mk_transform *xa, const m
     put(l - a->radius - b->radius, n, mk_v3_mad(xa->p, a->radius, n), 0, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
-MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb, int flip,
+MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, int flip,
                                  mk_distance_result *r)
 {
-    mk_mat3 ra = mk_rotation_of(xa->q);
-    mk_hit h = mk_closest_box_sphere(a->u.half_extents, a->radius, mk_mat3_tmul_v3(ra, mk_v3_sub(xb->p, xa->p)), b->radius);
-    put_framed(&h, &ra, xa->p, flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+    /* mk_closest_box_sphere's steps, answered in world space: the gap v and
+     * the box point q are rotated back beside the square root and the
+     * division, the long part of the chain, rather than after them. */
+    const mk_mat3 *ra = &xa->r;
+    mk_vec3 h = a->u.half_extents, c = mk_mat3_tmul_v3(*ra, mk_v3_sub(xb->p, xa->p)), q = mk_box_clamp(h, c), v = mk_v3_sub(c, q);
+    mk_vec3 vw = mk_mat3_mul_v3(*ra, v), qw = mk_v3_add(mk_mat3_mul_v3(*ra, q), xa->p), n;
+    mk_real l, s = mk_inv_len(mk_v3_len2(v), &l);
+    if (l > 0) {
+        n = mk_v3_scale(vw, s);
+    } else { /* centre inside the core: leave through the nearest face */
+        l = -mk_box_exit(h, c, &n, &q);
+        n = mk_mat3_mul_v3(*ra, n);
+        qw = mk_v3_add(mk_mat3_mul_v3(*ra, q), xa->p);
+    }
+    put(l - a->radius - b->radius, n, mk_v3_mad(qw, a->radius, n), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
-MK_ALWAYS_INLINE void capsule_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+MK_ALWAYS_INLINE void capsule_sphere(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                      int flip, mk_distance_result *r)
 {
-    put_aligned(mk_closest_capsule_sphere(a->u.capsule.half_height, mk_axis_of(xa->q), a->radius, mk_v3_sub(xb->p, xa->p),
+    put_aligned(mk_closest_capsule_sphere(a->u.capsule.half_height, xa->r.c2, a->radius, mk_v3_sub(xb->p, xa->p),
                                           b->radius),
                 xa->p, flip, r);
 }
 
-MK_ALWAYS_INLINE void capsules(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+MK_ALWAYS_INLINE void capsules(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                mk_distance_result *r)
 {
-    put_aligned(mk_closest_capsule_capsule(a->u.capsule.half_height, mk_axis_of(xa->q), a->radius, mk_v3_sub(xb->p, xa->p),
-                                           mk_axis_of(xb->q), b->u.capsule.half_height, b->radius),
+    put_aligned(mk_closest_capsule_capsule(a->u.capsule.half_height, xa->r.c2, a->radius, mk_v3_sub(xb->p, xa->p),
+                                           xb->r.c2, b->u.capsule.half_height, b->radius),
                 xa->p, 0, r);
 }
 
@@ -450,11 +497,10 @@ typedef enum framed_method { FRAMED_PLANE, FRAMED_BOX_BOX, FRAMED_GJK } framed_m
 
 /* Planes, box pairs, GJK and EPA: in A's frame with B's whole relative pose
  * (mk_pair). Out of line, so that no closed form pays for its stack frame. */
-static MK_NOINLINE mk_status framed(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static MK_NOINLINE mk_status framed(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                     framed_method m, int flip, mk_gjk_cache *cache, mk_distance_result *r)
 {
-    mk_mat3 ra = mk_rotation_of(xa->q);
-    mk_pair p = mk_pair_in(a, ra, xa->p, b, *xb);
+    mk_pair p = mk_pair_of_poses_(a, xa, b, xb);
     answer ans;
     ans.iterations = 0;
     ans.method = MK_METHOD_CLOSED_FORM;
@@ -477,7 +523,7 @@ static MK_NOINLINE mk_status framed(const mk_shape *a, const mk_transform *xa, c
 #endif
     }
     }
-    put_framed(&ans.hit, &ra, xa->p, flip, ans.iterations, ans.method, ans.state, r);
+    put_framed(&ans.hit, &xa->r, xa->p, flip, ans.iterations, ans.method, ans.state, r);
     return MK_OK;
 }
 
@@ -487,10 +533,10 @@ static MK_NOINLINE mk_status framed(const mk_shape *a, const mk_transform *xa, c
  * a closed form checks its two known types with no switch) and answers.
  * Methods named X_Y with a pair that has a closed form only one way round
  * run it as (Y, X) and flip the answer back. Shapes are not NULL. */
-typedef mk_status (*pair_fn)(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+typedef mk_status (*pair_fn)(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                              mk_gjk_cache *cache, mk_distance_result *r);
 
-static mk_status q_spheres(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_spheres(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                            mk_gjk_cache *cache, mk_distance_result *r)
 {
     (void)cache;
@@ -499,7 +545,7 @@ static mk_status q_spheres(const mk_shape *a, const mk_transform *xa, const mk_s
     return MK_OK;
 }
 
-static mk_status q_box_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_box_sphere(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                               mk_gjk_cache *cache, mk_distance_result *r)
 {
     (void)cache;
@@ -508,7 +554,7 @@ static mk_status q_box_sphere(const mk_shape *a, const mk_transform *xa, const m
     return MK_OK;
 }
 
-static mk_status q_sphere_box(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_sphere_box(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                               mk_gjk_cache *cache, mk_distance_result *r)
 {
     (void)cache;
@@ -517,7 +563,7 @@ static mk_status q_sphere_box(const mk_shape *a, const mk_transform *xa, const m
     return MK_OK;
 }
 
-static mk_status q_capsule_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_capsule_sphere(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                   mk_gjk_cache *cache, mk_distance_result *r)
 {
     (void)cache;
@@ -526,7 +572,7 @@ static mk_status q_capsule_sphere(const mk_shape *a, const mk_transform *xa, con
     return MK_OK;
 }
 
-static mk_status q_sphere_capsule(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_sphere_capsule(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                   mk_gjk_cache *cache, mk_distance_result *r)
 {
     (void)cache;
@@ -535,7 +581,7 @@ static mk_status q_sphere_capsule(const mk_shape *a, const mk_transform *xa, con
     return MK_OK;
 }
 
-static mk_status q_capsules(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_capsules(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                             mk_gjk_cache *cache, mk_distance_result *r)
 {
     (void)cache;
@@ -544,28 +590,28 @@ static mk_status q_capsules(const mk_shape *a, const mk_transform *xa, const mk_
     return MK_OK;
 }
 
-static mk_status q_shape_plane(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_shape_plane(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                mk_gjk_cache *cache, mk_distance_result *r)
 {
     if (!accept(a, a->type, xa, b, MK_SHAPE_PLANE, xb)) return diagnose(a, xa, b, xb);
     return framed(a, xa, b, xb, FRAMED_PLANE, 0, cache, r);
 }
 
-static mk_status q_plane_shape(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_plane_shape(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                mk_gjk_cache *cache, mk_distance_result *r)
 {
     if (!accept(b, b->type, xb, a, MK_SHAPE_PLANE, xa)) return diagnose(a, xa, b, xb);
     return framed(b, xb, a, xa, FRAMED_PLANE, 1, cache, r);
 }
 
-static mk_status q_box_box(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_box_box(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                            mk_gjk_cache *cache, mk_distance_result *r)
 {
     if (!accept(a, MK_SHAPE_BOX, xa, b, MK_SHAPE_BOX, xb)) return diagnose(a, xa, b, xb);
     return framed(a, xa, b, xb, FRAMED_BOX_BOX, 0, cache, r);
 }
 
-static mk_status q_gjk(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_gjk(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                        mk_gjk_cache *cache, mk_distance_result *r)
 {
     if (!accept(a, a->type, xa, b, b->type, xb)) return diagnose(a, xa, b, xb);
@@ -573,7 +619,7 @@ static mk_status q_gjk(const mk_shape *a, const mk_transform *xa, const mk_shape
 }
 
 /* Plane-plane pairs, and shapes of unknown type (which validation names). */
-static mk_status q_unsupported(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+static mk_status q_unsupported(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                mk_gjk_cache *cache, mk_distance_result *r)
 {
     mk_status st = check(a, xa, b, xb);
@@ -599,25 +645,34 @@ static pair_fn method_of(const mk_shape *a, const mk_shape *b)
     return ta < MK_SHAPE_TYPE_COUNT && tb < MK_SHAPE_TYPE_COUNT ? methods[ta][tb] : q_unsupported;
 }
 
+mk_status mk_distance_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_gjk_cache *cache,
+                           mk_distance_result *out)
+{
+    if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
+    return method_of(a, b)(a, xa, b, xb, cache, out);
+}
+
 mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
                       mk_distance_result *out)
 {
+    mk_pose pa, pb;
+    mk_status st;
     if (!a || !b || !out) return MK_ERR_NULL;
-    return method_of(a, b)(a, &xa, b, &xb, cache, out);
+    if ((st = poses_of(a, &xa, b, &xb, &pa, &pb)) != MK_OK) return st;
+    return method_of(a, b)(a, &pa, b, &pb, cache, out);
 }
 
-mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
-                     int *overlapping)
+/* The boolean query for checked poses (shapes and poses not NULL). */
+static mk_status overlap(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_gjk_cache *cache,
+                         int *overlapping)
 {
-    pair_fn m;
+    pair_fn m = method_of(a, b);
     mk_distance_result r;
     mk_status st;
-    if (!a || !b || !overlapping) return MK_ERR_NULL;
-    m = method_of(a, b);
     if (m == q_spheres) { /* no square root */
-        mk_vec3 d = mk_v3_sub(xb.p, xa.p);
+        mk_vec3 d = mk_v3_sub(xb->p, xa->p);
         mk_real s = a->radius + b->radius;
-        if ((st = check(a, &xa, b, &xb)) != MK_OK) return st;
+        if ((st = check(a, xa, b, xb)) != MK_OK) return st;
         *overlapping = mk_v3_len2(d) <= s * s;
         return MK_OK;
     }
@@ -625,17 +680,34 @@ mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     if (m == q_gjk || m == q_box_box) { /* GJK stops at the first separating axis or enclosing simplex */
         mk_pair p;
         mk_gjk_result g;
-        if ((st = check(a, &xa, b, &xb)) != MK_OK) return st;
-        p = mk_pair_make(a, xa, b, xb);
+        if ((st = check(a, xa, b, xb)) != MK_OK) return st;
+        p = mk_pair_of_poses_(a, xa, b, xb);
         mk_gjk(&p, cache, 1, a->radius + b->radius, &g);
         if (cache) mk_gjk_cache_store(&g.s, g.normal, cache);
         *overlapping = g.overlap;
         return MK_OK;
     }
 #endif
-    if ((st = m(a, &xa, b, &xb, cache, &r)) != MK_OK) return st;
+    if ((st = m(a, xa, b, xb, cache, &r)) != MK_OK) return st;
     *overlapping = r.distance <= 0;
     return MK_OK;
+}
+
+mk_status mk_overlap_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_gjk_cache *cache,
+                          int *overlapping)
+{
+    if (!a || !xa || !b || !xb || !overlapping) return MK_ERR_NULL;
+    return overlap(a, xa, b, xb, cache, overlapping);
+}
+
+mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
+                     int *overlapping)
+{
+    mk_pose pa, pb;
+    mk_status st;
+    if (!a || !b || !overlapping) return MK_ERR_NULL;
+    if ((st = poses_of(a, &xa, b, &xb, &pa, &pb)) != MK_OK) return st;
+    return overlap(a, &pa, b, &pb, cache, overlapping);
 }
 
 /* ---- seed 003: approximate distance ---------------------------------------- */
@@ -679,10 +751,11 @@ mk_status mk_approx_distance(const mk_shape *a, mk_transform xa, const mk_shape 
     mk_pair p;
     mk_vec3 va, vb;
     int ia = -1, ib;
+    mk_pose pa, pb;
     if (!a || !b || !out) return MK_ERR_NULL;
-    if ((st = check(a, &xa, b, &xb)) != MK_OK) return st;
+    if ((st = poses_of(a, &xa, b, &xb, &pa, &pb)) != MK_OK || (st = check(a, &pa, b, &pb)) != MK_OK) return st;
     if (!mk_core_is_polytope(a) || !mk_core_is_polytope(b)) return MK_ERR_UNSUPPORTED;
-    p = mk_pair_make(a, xa, b, xb);
+    p = mk_pair_of_poses_(a, &pa, b, &pb);
     /* Start from A's vertex facing B rather than an arbitrary one: one support, a better bound. */
     mk_core_support_inl(a, p.t, &ia);
     va = mk_core_vertex(a, ia);

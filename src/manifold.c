@@ -7,6 +7,7 @@
  * pairs name their features the same way. Pairs are written for one order of
  * shape types; the other order swaps the shapes and mirrors the result. */
 #include "manifold_internal.h"
+#include "pose.h"
 #include "polytope.h"
 #include "sat.h"
 
@@ -474,14 +475,6 @@ static pair_fn pair_table(mk_shape_type ta, mk_shape_type tb)
     }
 }
 
-static mk_status check_transform(mk_transform x)
-{
-    /* A finite sum means four finite components (an infinite or NaN one
-     * would make it infinite or NaN). */
-    if (!mk_v3_is_valid(x.p) || !mk_real_is_valid(x.q.x + x.q.y + x.q.z + x.q.w)) return MK_ERR_NOT_FINITE;
-    return mk_fabs_(mk_quat_len2(x.q) - 1) <= MK_QUAT_TOLERANCE ? MK_OK : MK_ERR_BAD_ROTATION;
-}
-
 /* Moves the reduced manifold from A's frame to world space; `swap` mirrors
  * it when the pair routine ran with the shapes exchanged. */
 static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair *pair, int swap, mk_manifold *out)
@@ -515,40 +508,41 @@ static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair 
     }
 }
 
-mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_real margin,
-                     mk_manifold_cache *cache, mk_manifold *out)
+mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                          mk_manifold_cache *cache, mk_manifold *out)
 {
     mk_status st;
     pair_fn fn;
     int swap = 0;
     mk_pair p;
-    mk_mat3 ra;
     mk_mf m;
-    if (!a || !b || !out) return MK_ERR_NULL;
+    if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
     if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
-    if ((st = check_transform(xa)) != MK_OK || (st = check_transform(xb)) != MK_OK) return st;
+    if (!mk_pose_ok_(xa) || !mk_pose_ok_(xb)) return MK_ERR_UNCHECKED_POSE;
     if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
     if (margin < 0) return MK_ERR_BAD_ARGUMENT;
     if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
     fn = pair_table(a->type, b->type);
     if (!fn) {
+        const mk_shape *s = a;
+        const mk_pose *x = xa;
         fn = pair_table(b->type, a->type);
         if (!fn) return MK_ERR_UNSUPPORTED;
         swap = 1;
+        a = b;
+        b = s;
+        xa = xb;
+        xb = x;
     }
-    if (swap) mk_swap_pair_(&a, &xa, &b, &xb);
 #ifndef MK_WITHOUT_SAT
-    if (fn == polytopes && polytopes_apart(a, xa.p, b, xb.p, margin)) {
+    if (fn == polytopes && polytopes_apart(a, xa->p, b, xb->p, margin)) {
         if (cache) cache->axis = MK_SAT_NONE;
         out->count = 0;
         out->normal = mk_v3(0, 0, 1);
         return MK_OK;
     }
 #endif
-    /* A's rotation once, exact for any accepted quaternion (gjk.h): it builds
-     * the pair and takes the manifold back to world space. */
-    ra = mk_rotation_of(xa.q);
-    p = mk_pair_in(a, ra, xa.p, b, xb);
+    p = mk_pair_of_poses_(a, xa, b, xb);
     m.count = 0;
     m.margin = margin;
     m.cores_apart = 0;
@@ -556,6 +550,24 @@ mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_t
     m.normal = mk_v3(0, 0, 1);
     if ((st = fn(&p, &m, cache)) != MK_OK) return st;
     mk_mf_reduce(&m);
-    finish(&m, &ra, xa.p, &p, swap, out);
+    finish(&m, &xa->r, xa->p, &p, swap, out);
     return MK_OK;
+}
+
+/* Checks and converts the transforms (after the shapes, in argument order),
+ * then the pose query. */
+mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_real margin,
+                     mk_manifold_cache *cache, mk_manifold *out)
+{
+    mk_status st;
+    mk_pose pa, pb;
+    if (!a || !b || !out) return MK_ERR_NULL;
+    if (!mk_transform_ok_(&xa) || !mk_transform_ok_(&xb)) {
+        if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
+        if ((st = mk_transform_check_(xa)) != MK_OK) return st;
+        return mk_transform_check_(xb);
+    }
+    mk_pose_set_(&pa, &xa);
+    mk_pose_set_(&pb, &xb);
+    return mk_collide_pose(a, &pa, b, &pb, margin, cache, out);
 }

@@ -1,8 +1,9 @@
-/* math3d.c: the one external definition of every inline function in minko/math3d.h.
+/* math3d.c: the one external definition of every inline function in minko/math3d.h,
+ * and the pose constructors.
  * C99 6.7.4: an `extern` declaration in exactly one translation unit makes the
  * inline definitions from the header into exported symbols. scripts/check-exports.sh
  * fails the build if a header function is missing from libminko.so. */
-#include "minko/math3d.h"
+#include "pose.h"
 
 extern int mk_real_is_valid(mk_real a);
 extern mk_real mk_min(mk_real a, mk_real b);
@@ -28,6 +29,7 @@ extern mk_vec3 mk_v3_abs(mk_vec3 a);
 extern mk_real mk_v3_max_abs(mk_vec3 a);
 extern mk_vec3 mk_v3_normalize(mk_vec3 a);
 extern int mk_v3_is_valid(mk_vec3 a);
+extern int mk_position_is_valid(mk_vec3 p);
 extern mk_vec3 mk_v3_perp(mk_vec3 n);
 extern mk_quat mk_quat_make(mk_real x, mk_real y, mk_real z, mk_real w);
 extern mk_quat mk_quat_identity(void);
@@ -64,3 +66,53 @@ extern mk_aabb mk_aabb_expand(mk_aabb a, mk_real r);
 extern mk_vec3 mk_aabb_center(mk_aabb a);
 extern mk_vec3 mk_aabb_extents(mk_aabb a);
 extern int mk_aabb_is_valid(mk_aabb a);
+
+mk_status mk_transform_check_(mk_transform x)
+{
+    mk_quat q = x.q;
+    if (!mk_v3_is_valid(x.p) || !mk_real_is_valid(q.x) || !mk_real_is_valid(q.y) || !mk_real_is_valid(q.z) || !mk_real_is_valid(q.w))
+        return MK_ERR_NOT_FINITE;
+    if (!mk_position_is_valid(x.p)) return MK_ERR_OUT_OF_RANGE;
+    return mk_quat_is_valid(q) ? MK_OK : MK_ERR_BAD_ROTATION;
+}
+
+mk_status mk_pose_from_transform(mk_transform x, mk_pose *out)
+{
+    mk_status st;
+    if (!out) return MK_ERR_NULL;
+    if (!mk_transform_ok_(&x) && (st = mk_transform_check_(x)) != MK_OK) return st;
+    mk_pose_set_(out, &x);
+    return MK_OK;
+}
+
+/* The largest deviation of r^T r from the identity. */
+static mk_real orthonormality_error(const mk_mat3 *r)
+{
+    mk_real e = mk_fabs_(mk_v3_len2(r->c0) - 1);
+    e = mk_max(e, mk_fabs_(mk_v3_len2(r->c1) - 1));
+    e = mk_max(e, mk_fabs_(mk_v3_len2(r->c2) - 1));
+    e = mk_max(e, mk_fabs_(mk_v3_dot(r->c0, r->c1)));
+    e = mk_max(e, mk_fabs_(mk_v3_dot(r->c0, r->c2)));
+    return mk_max(e, mk_fabs_(mk_v3_dot(r->c1, r->c2)));
+}
+
+mk_status mk_pose_from_matrix(mk_mat3 r, mk_vec3 p, mk_pose *out)
+{
+    mk_real e;
+    if (!out) return MK_ERR_NULL;
+    if (!mk_v3_is_valid(r.c0) || !mk_v3_is_valid(r.c1) || !mk_v3_is_valid(r.c2) || !mk_v3_is_valid(p)) return MK_ERR_NOT_FINITE;
+    if (!mk_position_is_valid(p)) return MK_ERR_OUT_OF_RANGE;
+    e = orthonormality_error(&r);
+    /* Orthonormal within the tolerance and not a reflection (det = c2 . (c0 x c1) is then near +-1). */
+    if (!(e <= MK_ROTATION_TOLERANCE) || !(mk_v3_dot(r.c2, mk_v3_cross(r.c0, r.c1)) > 0)) return MK_ERR_BAD_ROTATION;
+    if (e > 32 * MK_REAL_EPSILON) {
+        /* Drifted beyond rounding: queries take r^T as r's inverse, so hand them an exact rotation. */
+        r.c0 = mk_v3_normalize(r.c0);
+        r.c1 = mk_v3_normalize(mk_v3_mad(r.c1, -mk_v3_dot(r.c0, r.c1), r.c0));
+        r.c2 = mk_v3_cross(r.c0, r.c1);
+    }
+    out->r = r;
+    out->p = p;
+    out->checked = MK_POSE_CHECKED_;
+    return MK_OK;
+}

@@ -14,7 +14,7 @@
 #else
 #  include "minko/distance.h" /* mk_gjk_cache */
 #endif
-#include "shape_internal.h"
+#include "pose.h"
 
 /* Grazing rays converge linearly (the error halves per step), so 64 steps
  * reach the rounding floor from any start; typical hits need 1 to 6. */
@@ -263,12 +263,6 @@ static int ray_newton(const mk_shape *s, mk_vec3 o, mk_vec3 d, local_hit *h)
     return 0;
 }
 
-static mk_status check_transform(mk_transform xf)
-{
-    if (!mk_v3_is_valid(xf.p) || !mk_real_is_valid(xf.q.x + xf.q.y + xf.q.z + xf.q.w)) return MK_ERR_NOT_FINITE;
-    return mk_quat_is_valid(xf.q) ? MK_OK : MK_ERR_BAD_ROTATION;
-}
-
 mk_status mk_raycast(const mk_shape *s, mk_transform xf, mk_vec3 origin, mk_vec3 translation, mk_ray_hit *out)
 {
     mk_status st;
@@ -277,8 +271,10 @@ mk_status mk_raycast(const mk_shape *s, mk_transform xf, mk_vec3 origin, mk_vec3
     int hit;
     if (!out) return MK_ERR_NULL;
     if ((st = mk_shape_validate(s)) != MK_OK) return st;
-    if ((st = check_transform(xf)) != MK_OK) return st;
+    if ((st = mk_transform_check_(xf)) != MK_OK) return st;
     if (!mk_v3_is_valid(origin) || !mk_v3_is_valid(translation)) return MK_ERR_NOT_FINITE;
+    /* Both ends of the ray within MK_MAX_COORD, as every position a query takes. */
+    if (!mk_position_is_valid(origin) || !mk_position_is_valid(mk_v3_add(origin, translation))) return MK_ERR_OUT_OF_RANGE;
 #ifdef MK_WITHOUT_GJK
     if (s->type == MK_SHAPE_HULL && s->radius > 0) return MK_ERR_UNSUPPORTED; /* a rounded hull needs GJK */
 #endif

@@ -11,6 +11,11 @@
 /* Relative size under which a Gauss-map sign test is too close to call. */
 #define SAT_SIGN_TOL (MK_REAL(64.0) * MK_REAL_EPSILON)
 
+/* Points of each core that prune faces and edges of the other (see
+ * plane_below): its six axis-extreme vertices and its deepest vertex under
+ * the seed face of the other. */
+#define SAT_PROBES 7
+
 /* The best axis found so far of one kind. */
 typedef struct sat_axis {
     mk_real sep;
@@ -26,12 +31,14 @@ typedef struct sat_ctx {
     sat_axis face_a, face_b, edges;
     int stopped;
     /* Pruning (hulls only; see prune_init): the largest separation offered
-     * so far, the centroids of A and B in A's frame, the radii of balls
-     * about them inside each core less the rounding slack, and the band of
-     * the options' hysteresis. */
-    mk_real lo, rel, abs_band;
+     * so far, the band of the options' hysteresis, the rounding slack, the
+     * centroids, the radii of balls about them inside each core (less the
+     * slack) and the probes. */
+    mk_real lo, rel, abs_band, slack;
     mk_vec3 ca, cb, ca_in_b; /* A's centroid, B's (in A's frame), A's in B's frame */
     mk_real ra, rb;
+    mk_vec3 pb[SAT_PROBES], pa_in_b[SAT_PROBES]; /* probes (see plane_below): points of B in A's frame, of A in B's */
+    int prune;               /* 0: a band too wide for the floor's argument */
 } sat_ctx;
 
 mk_sat_options mk_sat_defaults(void)
@@ -96,13 +103,15 @@ typedef struct sat_edge {
  * never ties). Cheap upper bounds on the separation along one face, or
  * along every axis an edge of B takes part in, then skip most support
  * queries and Gauss-map walks of a penetrating pair. The bounds come from
- * balls inside the cores: along any unit n, min_B n.x <= n.c_B - r_B and
- * max_A n.x >= n.c_A + r_A, c the centroid, r the inner radius, less a slack
- * for rounding and for the construction tolerance (vertices lie within a
- * few tol of their planes). */
+ * points known to be in the cores: a ball inside each (along any unit n,
+ * min_B n.x <= n.c_B - r_B and max_A n.x >= n.c_A + r_A, c the centroid, r
+ * the inner radius) and a few vertices (probes), with a slack for rounding
+ * and for the construction tolerance (vertices lie within a few tol of
+ * their planes). A warm call that stops on its first axis (apart) pays for
+ * none of this. */
 static mk_real prune_floor(const sat_ctx *c)
 {
-    return c->lo > -MK_REAL_MAX ? c->lo - (c->rel * mk_fabs_(c->lo) + c->abs_band) : -MK_REAL_MAX;
+    return c->prune && c->lo > -MK_REAL_MAX ? c->lo - (c->rel * mk_fabs_(c->lo) + c->abs_band) : -MK_REAL_MAX;
 }
 
 static void prune_init(sat_ctx *c, const mk_sat_options *opt)
@@ -110,8 +119,9 @@ static void prune_init(sat_ctx *c, const mk_sat_options *opt)
     const mk_hull *a = c->a, *b = c->b;
     mk_real scale = mk_v3_len(c->t) + mk_v3_len(a->centroid) + mk_v3_len(b->centroid) + a->outer_radius + b->outer_radius;
     mk_real slack = MK_REAL(1024.0) * MK_REAL_EPSILON * scale + 8 * (a->tolerance + b->tolerance);
-    int banded = opt->prefer != MK_SAT_NONE;
-    c->lo = -MK_REAL_MAX;
+    /* the six axis-extreme vertices stored after the neighbour lists */
+    const uint16_t *xa = a->adjacency + a->adjacency[a->vertex_count], *xb = b->adjacency + b->adjacency[b->vertex_count];
+    int banded = opt->prefer != MK_SAT_NONE, k;
     c->ca = a->centroid;
     c->cb = mk_v3_add(mk_mat3_mul_v3(c->R, b->centroid), c->t);
     c->ca_in_b = mk_mat3_tmul_v3(c->R, mk_v3_sub(c->ca, c->t));
@@ -119,60 +129,94 @@ static void prune_init(sat_ctx *c, const mk_sat_options *opt)
     c->rb = b->inner_radius - slack;
     c->rel = banded ? opt->prefer_rel : 0;
     c->abs_band = banded ? opt->prefer_abs : 0;
-    /* A band this wide (or not a number) prunes nothing: radii of -max make
-     * every bound +max (and skip the seed). */
-    if (!(c->rel < 1) || !(c->abs_band < MK_REAL_MAX)) c->ra = c->rb = -MK_REAL_MAX;
+    /* A band this wide (or not a number) prunes nothing. */
+    c->prune = c->rel < 1 && c->abs_band < MK_REAL_MAX;
+    c->slack = slack;
+    for (k = 0; k < 6; ++k) {
+        c->pb[k] = mk_v3_add(mk_mat3_mul_v3(c->R, b->vertices[xb[k]]), c->t);
+        c->pa_in_b[k] = mk_mat3_tmul_v3(c->R, mk_v3_sub(a->vertices[xa[k]], c->t));
+    }
+    c->pb[6] = c->pb[0]; /* until prune_seed finds better */
+    c->pa_in_b[6] = c->pa_in_b[0];
 }
 
-/* Is A's face i below the floor? min_B n.x - d <= n.c_B - r_B - d. */
+/* Is the plane (n, d) below the floor for a core whose points include the
+ * ball (c, r) and the probes p[0 .. SAT_PROBES), all in the plane's frame? Its lowest
+ * point is no higher than any of them: min n.x - d <= n.c - r - d and
+ * <= n.p_k - d. The ball bounds faces facing away; the probes, a rough
+ * outline of the core, bound the rest better on elongated cores. */
+static int plane_below(const sat_ctx *c, mk_vec3 n, mk_real d, mk_vec3 centre, mk_real r, const mk_vec3 *p)
+{
+    mk_real floor = prune_floor(c) + d, low;
+    int k;
+    if (mk_v3_dot(n, centre) - r < floor) return 1;
+    low = mk_v3_dot(n, p[0]);
+    for (k = 1; k < SAT_PROBES; ++k) low = mk_min(low, mk_v3_dot(n, p[k]));
+    return low + c->slack < floor;
+}
+
+/* Is A's face i below the floor? Its separation is min_B n.x - d. */
 static int face_a_pruned(const sat_ctx *c, int i)
 {
     const mk_plane *pl = &c->a->planes[i];
-    return mk_v3_dot(pl->normal, c->cb) - pl->offset - c->rb < prune_floor(c);
+    return plane_below(c, pl->normal, pl->offset, c->cb, c->rb, c->pb);
 }
 
 /* Is B's face f below the floor? The separation along its normal m (A's
- * frame) negated is min_A m.x - (m.t + d) <= m.(c_A - t) - r_A - d, which
- * is the same in B's frame: no rotation for a face that is skipped. */
+ * frame) negated is min_A m.x - (m.t + d), the same in B's frame: no
+ * rotation for a face that is skipped. */
 static int face_b_pruned(const sat_ctx *c, int f)
 {
     const mk_plane *pl = &c->b->planes[f];
-    return mk_v3_dot(pl->normal, c->ca_in_b) - pl->offset - c->ra < prune_floor(c);
+    return plane_below(c, pl->normal, pl->offset, c->ca_in_b, c->ra, c->pa_in_b);
+}
+
+/* Is n.D below `level` for every unit n on the arc from u = -n1 to v = -n2?
+ * On it n.D is at most max(u.D, v.D) when that is negative, else that over
+ * cos(theta / 2), theta the arc's angle, cos^2(theta / 2) = (1 + u.v) / 2,
+ * and never more than |D|. */
+static int arc_below(mk_vec3 n1, mk_vec3 n2, mk_vec3 D, mk_real level)
+{
+    mk_real m = -mk_min(mk_v3_dot(n1, D), mk_v3_dot(n2, D));
+    if (m < 0) return m < level;
+    if (!(level > 0)) return 0;
+    /* m / cos(theta / 2) < level, squared; or |D| < level */
+    return m * m < level * level * (1 + mk_v3_dot(n1, n2)) * MK_REAL(0.5) || mk_v3_len2(D) < level * level;
 }
 
 /* Are all the axes of B's half-edge j below the floor? Each is a unit n
  * with the edge B's support edge along -n, so min_B n.x = n.q (q on the
- * edge) and the separation is at most n.(q - c_A) - r_A; n lies on the arc
- * from u = -n1 to v = -n2 (the edge's face normals), where n.D for
- * D = q - c_A is at most max(u.D, v.D) when that is negative, else that
- * over cos(theta / 2), theta the arc's angle, cos^2(theta / 2) =
- * (1 + u.v) / 2, and never more than |D|. All of it in B's frame (dot
- * products do not see the rotation), so a skipped edge costs no transform.
- * An axis the Gauss-map test cannot call (parallel features) can lie off
- * the arc by the test's tolerance, a few hundred eps of |D|, which the
- * slack covers. */
+ * edge) and the separation is at most n.(q - x) for any point x of A: for
+ * the ball, n.(q - c_A) - r_A, and for each probe a_k, n.(q - a_k); n lies
+ * on the arc from -n1 to -n2 (the edge's face normals). All of it in B's
+ * frame (dot products do not see the rotation), so a skipped edge costs no
+ * transform. An axis the Gauss-map test cannot call (parallel features)
+ * can lie off the arc by the test's tolerance, a few hundred eps of |D|,
+ * which the slack covers. */
 static int edge_b_pruned(const sat_ctx *c, int j)
 {
     const mk_hull *b = c->b;
     const mk_hull_edge *E = &b->edges[j];
-    mk_vec3 n1 = b->planes[E->face].normal, n2 = b->planes[b->edges[E->twin].face].normal;
-    mk_vec3 D = mk_v3_sub(b->vertices[E->origin], c->ca_in_b);
-    mk_real m = -mk_min(mk_v3_dot(n1, D), mk_v3_dot(n2, D)), floor = prune_floor(c) + c->ra;
+    mk_vec3 n1 = b->planes[E->face].normal, n2 = b->planes[b->edges[E->twin].face].normal, q = b->vertices[E->origin];
+    mk_real floor = prune_floor(c);
+    int k;
     if (!(floor > -MK_REAL_MAX)) return 0;
-    if (m < 0) return m < floor;
-    if (!(floor > 0)) return 0;
-    /* m / cos(theta / 2) < floor, squared; or |D| < floor */
-    return m * m < floor * floor * (1 + mk_v3_dot(n1, n2)) * MK_REAL(0.5) || mk_v3_len2(D) < floor * floor;
+    if (arc_below(n1, n2, mk_v3_sub(q, c->ca_in_b), floor + c->ra)) return 1;
+    for (k = 0; k < SAT_PROBES; ++k)
+        if (arc_below(n1, n2, mk_v3_sub(q, c->pa_in_b[k]), floor - c->slack)) return 1;
+    return 0;
 }
 
-/* A seed for lo on a cold call: the separations along the face of A that
- * faces B's centroid most and the face of B that faces A's most. Both are
- * axes mk_sat tests anyway (so lo stays <= best); they are measured, not
- * offered, so the search below still finds every axis in its usual order. */
+/* A seed for lo: the separations along the face of A that faces B's
+ * centroid most and the face of B that faces A's most. Both are axes mk_sat
+ * tests anyway (so lo stays <= best); they are measured, not offered, so
+ * the search below still finds every axis in its usual order. The vertex of
+ * each core found deepest under the other's seed face, near where they
+ * touch, is the last probe. */
 static void prune_seed(sat_ctx *c)
 {
     const mk_hull *a = c->a, *b = c->b;
-    mk_vec3 d = mk_v3_sub(c->cb, c->ca), db = mk_mat3_tmul_v3(c->R, mk_v3_neg(d)), w, m;
+    mk_vec3 d = mk_v3_sub(c->cb, c->ca), db = mk_mat3_tmul_v3(c->R, mk_v3_neg(d)), m;
     int i, fa = 0, fb = 0, v;
     mk_real best_a = -MK_REAL_MAX, best_b = -MK_REAL_MAX, s;
     for (i = 0; i < a->face_count; ++i)
@@ -180,11 +224,12 @@ static void prune_seed(sat_ctx *c)
     for (i = 0; i < b->face_count; ++i)
         if ((s = mk_v3_dot(b->planes[i].normal, db)) > best_b) best_b = s, fb = i;
     v = mk_hull_support_index(b, mk_mat3_tmul_v3(c->R, mk_v3_neg(a->planes[fa].normal)), -1);
-    w = mk_v3_add(mk_mat3_mul_v3(c->R, b->vertices[v]), c->t);
-    s = mk_v3_dot(a->planes[fa].normal, w) - a->planes[fa].offset;
+    c->pb[6] = mk_v3_add(mk_mat3_mul_v3(c->R, b->vertices[v]), c->t);
+    s = mk_v3_dot(a->planes[fa].normal, c->pb[6]) - a->planes[fa].offset;
     m = mk_mat3_mul_v3(c->R, b->planes[fb].normal);
     v = mk_hull_support_index(a, mk_v3_neg(m), -1);
-    c->lo = mk_max(s, mk_v3_dot(m, mk_v3_sub(a->vertices[v], c->t)) - b->planes[fb].offset);
+    c->pa_in_b[6] = mk_mat3_tmul_v3(c->R, mk_v3_sub(a->vertices[v], c->t));
+    c->lo = mk_max(c->lo, mk_max(s, mk_v3_dot(m, mk_v3_sub(a->vertices[v], c->t)) - b->planes[fb].offset));
 }
 
 /* Separation along A's face normals. Consecutive faces' answers are close,
@@ -470,12 +515,12 @@ void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, con
     ctx_init(&c, R, t, opt);
     c.a = a;
     c.b = b;
-    prune_init(&c, opt);
     if (opt->first != MK_SAT_NONE && first_axis(&c, opt)) {
         finish(&c, opt, out);
         return;
     }
-    if (!(c.lo > -MK_REAL_MAX) && c.ra > -MK_REAL_MAX) prune_seed(&c);
+    prune_init(&c, opt);
+    if (c.prune) prune_seed(&c);
     faces_of_a(&c);
     faces_and_edges_of_b(&c);
     finish(&c, opt, out);

@@ -25,13 +25,15 @@
  * Gregorius (GDC 2013); an arc whose signs are too close to call (parallel
  * faces) is instead tested against all of A's edges, O(E_A). Faces of
  * either and edges of B whose separation is provably below the best so far
- * (bounds from balls inside the cores) skip their support query or walk.
- * Measured (demos/bench_sat --quick --family F under valgrind
- * --tool=callgrind --toggle-collect=mk_sat[_box_box], instructions per
- * call, separated and penetrating cases together): box-box 1.0k by
- * mk_sat_box_box, 17k by mk_sat on box views (session 3); a box and a
- * 32-point hull 37k; hulls of 8/32/128 points 16k/59k/172k (session 3,
- * before the pruning: 69k; 28k/160k/712k). Minko's GJK + EPA answers hull pairs
+ * (bounds from a ball inside each core and a few of its vertices) skip
+ * their support query or walk: O(F_A + F_B + E_B) cheap tests, then the
+ * queries above for the few axes that survive. Measured (demos/bench_sat
+ * --quick --family F under valgrind --tool=callgrind
+ * --toggle-collect=mk_sat[_box_box], instructions per call, separated and
+ * penetrating cases together): box-box 1.0k by mk_sat_box_box (session 3),
+ * 9.7k by mk_sat on box views; a box and a 32-point hull 30k; hulls of
+ * 8/32/128 points 13.5k/42k/129k (session 3, before the pruning: 17k; 70k;
+ * 28k/161k/718k). Minko's GJK + EPA answers hull pairs
  * faster (see the benchmark); SAT's value there is its feature output and
  * hysteresis.
  */

@@ -1,7 +1,7 @@
 /* shape.c: shape constructors, validation, support functions and bounds. */
 #include <math.h>
 
-#include "shape_internal.h"
+#include "pose.h"
 
 /* Finite-check first so a NaN size reports "not finite" rather than "bad size". */
 static mk_status check_size(mk_real v) { return !mk_real_is_valid(v) ? MK_ERR_NOT_FINITE : mk_size_ok_(v) ? MK_OK : MK_ERR_BAD_SIZE; }
@@ -178,8 +178,7 @@ mk_status mk_shape_aabb(const mk_shape *s, mk_transform xf, mk_aabb *out)
     mk_aabb b;
     if (!out) return MK_ERR_NULL;
     if ((st = mk_shape_validate(s)) != MK_OK) return st;
-    if (!mk_v3_is_valid(xf.p) || !mk_real_is_valid(xf.q.x + xf.q.y + xf.q.z + xf.q.w)) return MK_ERR_NOT_FINITE;
-    if (!mk_quat_is_valid(xf.q)) return MK_ERR_BAD_ROTATION;
+    if ((st = mk_transform_check_(xf)) != MK_OK) return st;
     if (s->type == MK_SHAPE_PLANE) {
         *out = plane_aabb(s, xf);
         return MK_OK;

@@ -4,16 +4,7 @@
 
 #include "minko/distance.h"
 #include "minko/toi.h"
-#include "shape_internal.h"
-#ifndef MK_WITHOUT_GJK
-#  include "gjk.h"
-#endif
-
-static mk_status check_transform(mk_transform xf)
-{
-    if (!mk_v3_is_valid(xf.p) || !mk_real_is_valid(xf.q.x + xf.q.y + xf.q.z + xf.q.w)) return MK_ERR_NOT_FINITE;
-    return mk_quat_is_valid(xf.q) ? MK_OK : MK_ERR_BAD_ROTATION;
-}
+#include "pose.h"
 
 /* A few ulps of slack: from_transforms can land a hair above pi. */
 static int angle_ok(mk_vec3 rotation) { return mk_v3_len(rotation) <= MK_SWEEP_MAX_ANGLE * (1 + 8 * MK_REAL_EPSILON); }
@@ -24,6 +15,9 @@ mk_status mk_sweep_validate(const mk_sweep *sw)
     if (!mk_v3_is_valid(sw->local_center) || !mk_v3_is_valid(sw->c0) || !mk_v3_is_valid(sw->c1) || !mk_v3_is_valid(sw->rotation) ||
         !mk_real_is_valid(sw->q0.x + sw->q0.y + sw->q0.z + sw->q0.w))
         return MK_ERR_NOT_FINITE;
+    /* Centres and the body's centre offset within MK_MAX_COORD keep the poses along the sweep in the range queries accept. */
+    if (!mk_position_is_valid(sw->c0) || !mk_position_is_valid(sw->c1) || !mk_position_is_valid(sw->local_center))
+        return MK_ERR_OUT_OF_RANGE;
     if (!mk_quat_is_valid(sw->q0)) return MK_ERR_BAD_ROTATION;
     return angle_ok(sw->rotation) ? MK_OK : MK_ERR_BAD_ARGUMENT;
 }
@@ -54,19 +48,24 @@ mk_status mk_sweep_from_transforms(mk_transform x0, mk_transform x1, mk_vec3 loc
 {
     mk_status st;
     mk_quat q0, q1, dq;
+    mk_vec3 c0, c1;
     mk_real s, angle;
     if (!out) return MK_ERR_NULL;
-    if ((st = check_transform(x0)) != MK_OK || (st = check_transform(x1)) != MK_OK) return st;
+    if ((st = mk_transform_check_(x0)) != MK_OK || (st = mk_transform_check_(x1)) != MK_OK) return st;
     if (!mk_v3_is_valid(local_center)) return MK_ERR_NOT_FINITE;
+    if (!mk_position_is_valid(local_center)) return MK_ERR_OUT_OF_RANGE;
     q0 = mk_quat_normalize(x0.q);
     q1 = mk_quat_normalize(x1.q);
     dq = mk_quat_mul(q1, mk_quat_conj(q0));
     if (dq.w < 0) dq = mk_quat_make(-dq.x, -dq.y, -dq.z, -dq.w); /* the short way round */
     s = mk_sqrt_(dq.x * dq.x + dq.y * dq.y + dq.z * dq.z);
     angle = (mk_real)(2 * atan2((double)s, (double)dq.w));
+    c0 = mk_transform_point(mk_transform_make(x0.p, q0), local_center);
+    c1 = mk_transform_point(mk_transform_make(x1.p, q1), local_center);
+    if (!mk_position_is_valid(c0) || !mk_position_is_valid(c1)) return MK_ERR_OUT_OF_RANGE;
     out->local_center = local_center;
-    out->c0 = mk_transform_point(mk_transform_make(x0.p, q0), local_center);
-    out->c1 = mk_transform_point(mk_transform_make(x1.p, q1), local_center);
+    out->c0 = c0;
+    out->c1 = c1;
     out->q0 = q0;
     out->rotation = s > 0 ? mk_v3_scale(mk_v3(dq.x, dq.y, dq.z), angle / s) : mk_v3_zero();
     return MK_OK;
@@ -76,19 +75,26 @@ mk_status mk_sweep_from_velocity(mk_transform x0, mk_vec3 linear_velocity, mk_ve
                                  mk_sweep *out)
 {
     mk_status st;
-    mk_vec3 rotation;
+    mk_vec3 rotation, c0, c1;
+    mk_quat q0;
     if (!out) return MK_ERR_NULL;
-    if ((st = check_transform(x0)) != MK_OK) return st;
+    if ((st = mk_transform_check_(x0)) != MK_OK) return st;
     if (!mk_v3_is_valid(linear_velocity) || !mk_v3_is_valid(angular_velocity) || !mk_real_is_valid(dt) || !mk_v3_is_valid(local_center))
         return MK_ERR_NOT_FINITE;
     rotation = mk_v3_scale(angular_velocity, dt);
     if (dt < 0 || !mk_v3_is_valid(rotation) || !angle_ok(rotation)) return MK_ERR_BAD_ARGUMENT;
+    if (!mk_position_is_valid(local_center)) return MK_ERR_OUT_OF_RANGE;
+    q0 = mk_quat_normalize(x0.q);
+    c0 = mk_transform_point(mk_transform_make(x0.p, q0), local_center);
+    c1 = mk_v3_mad(c0, dt, linear_velocity);
+    if (!mk_v3_is_valid(c1)) return MK_ERR_NOT_FINITE;
+    if (!mk_position_is_valid(c0) || !mk_position_is_valid(c1)) return MK_ERR_OUT_OF_RANGE;
     out->local_center = local_center;
-    out->q0 = mk_quat_normalize(x0.q);
-    out->c0 = mk_transform_point(mk_transform_make(x0.p, out->q0), local_center);
-    out->c1 = mk_v3_mad(out->c0, dt, linear_velocity);
+    out->q0 = q0;
+    out->c0 = c0;
+    out->c1 = c1;
     out->rotation = rotation;
-    return mk_v3_is_valid(out->c1) ? MK_OK : MK_ERR_NOT_FINITE;
+    return MK_OK;
 }
 
 mk_status mk_sweep_transform(const mk_sweep *sw, mk_real t, mk_transform *out)

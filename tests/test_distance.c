@@ -4,6 +4,9 @@
 #include <string.h>
 
 #include "minko/distance.h"
+#include "minko/manifold.h"
+#include "minko/raycast.h"
+#include "minko/toi.h"
 #include "shape_internal.h" /* MK_MAX_SIZE */
 #include "support/cases.h"
 #include "support/mk_test.h"
@@ -726,12 +729,15 @@ END_TEST
  * by mk_shape_validate, then each pose (finite, then unit within
  * MK_QUAT_TOLERANCE), for every shape type with every size field set to
  * NaN, +-Inf, 0, negative and the MK_MAX_SIZE boundary, and poses with each
- * component non-finite or the quaternion just inside or outside tolerance. */
+ * component non-finite, a coordinate at or just beyond MK_MAX_COORD, or the
+ * quaternion just inside or outside tolerance. */
 static mk_status pose_status(mk_transform x)
 {
     if (!mk_v3_is_valid(x.p) || !mk_real_is_valid(x.q.x) || !mk_real_is_valid(x.q.y) || !mk_real_is_valid(x.q.z) ||
         !mk_real_is_valid(x.q.w))
         return MK_ERR_NOT_FINITE;
+    if (fabs((double)x.p.x) > MK_MAX_COORD || fabs((double)x.p.y) > MK_MAX_COORD || fabs((double)x.p.z) > MK_MAX_COORD)
+        return MK_ERR_OUT_OF_RANGE;
     return mk_quat_is_valid(x.q) ? MK_OK : MK_ERR_BAD_ROTATION;
 }
 
@@ -810,12 +816,16 @@ START_TEST(quick_test_matches_diagnosis)
         s.u.hull = &fake;
         for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) expect_contract(&s, xa, &good[u], xb), expect_contract(&good[u], xa, &s, xb);
     }
-    /* Each pose component non-finite; quaternions just inside and outside the tolerance, or overflowing |q|^2. */
+    /* Each pose component non-finite or a coordinate at / just beyond the
+     * bound; quaternions just inside and outside the tolerance, or overflowing |q|^2. */
     for (c = 0; c < 7 + 5; ++c) {
-        for (k = 0; k < 3; ++k) {
+        for (k = 0; k < 5; ++k) {
+            const mk_real far[2] = {MK_MAX_COORD, MK_MAX_COORD * (1 + 2 * MK_REAL_EPSILON)};
             mk_transform x = xa;
             mk_real *comp = c < 3 ? &x.p.x + c : &x.q.x + (c - 3);
-            if (c < 7) *comp = bad[k];
+            if (k >= 3 && c >= 3) continue; /* only positions have a range */
+            if (c < 3 && k >= 3) *comp = (c == 1 ? -1 : 1) * far[k - 3];
+            else if (c < 7) *comp = bad[k];
             else if (c < 11) {
                 mk_real g = mk_sqrt_(1 + (c - 7 < 2 ? MK_REAL(0.9) : MK_REAL(1.1)) * (c % 2 ? -1 : 1) * MK_QUAT_TOLERANCE);
                 x.q = mk_quat_make(x.q.x * g, x.q.y * g, x.q.z * g, x.q.w * g);
@@ -824,6 +834,184 @@ START_TEST(quick_test_matches_diagnosis)
             for (t = 0; t < MK_SHAPE_TYPE_COUNT; ++t)
                 for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) expect_contract(&good[t], x, &good[u], xb), expect_contract(&good[t], xb, &good[u], x);
         }
+    }
+    mk_hull_destroy(hull);
+}
+END_TEST
+
+/* The pose path is the implementation; the mk_transform path checks,
+ * converts and calls it. Both must answer bit for bit the same, for every
+ * pair of shape types, in mk_distance, mk_overlap and mk_collide. */
+START_TEST(pose_path_matches_transform_path)
+{
+    static const mk_vec3 cube[8] = {{-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {-1, 1, 1}, {1, 1, 1}};
+    mk_hull *hull = NULL;
+    mk_shape sh[MK_SHAPE_TYPE_COUNT];
+    mk_rng rng = {31};
+    int t, u, i;
+    MK_ASSERT_STATUS(mk_hull_create(cube, 8, NULL, &hull), MK_OK);
+    mk_shape_sphere(0.5, &sh[MK_SHAPE_SPHERE]);
+    mk_shape_box(mk_v3(1, 0.5, 0.25), 0.05, &sh[MK_SHAPE_BOX]);
+    mk_shape_capsule(0.25, 1, &sh[MK_SHAPE_CAPSULE]);
+    mk_shape_cylinder(0.5, 1, 0, &sh[MK_SHAPE_CYLINDER]);
+    mk_shape_cone(0.5, 1, 0.05, &sh[MK_SHAPE_CONE]);
+    mk_shape_hull(hull, 0, &sh[MK_SHAPE_HULL]);
+    mk_shape_plane(mk_v3(0, 0, 1), -1, &sh[MK_SHAPE_PLANE]);
+    for (t = 0; t < MK_SHAPE_TYPE_COUNT; ++t) {
+        for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) {
+            for (i = 0; i < 20; ++i) {
+                mk_real g = 1 + MK_QUAT_TOLERANCE / 4; /* a drifted quaternion: the pose holds its exact rotation */
+                mk_quat q = mk_rng_quat(&rng);
+                mk_transform xa = xfq(mk_rng_v3(&rng, -1, 1), mk_quat_make(q.x * g, q.y * g, q.z * g, q.w * g));
+                mk_transform xb = xfq(mk_rng_v3(&rng, -2.5, 2.5), mk_rng_quat(&rng));
+                mk_pose pa, pb;
+                mk_distance_result r1, r2;
+                mk_manifold m1, m2;
+                int o1 = 7, o2 = 9;
+                mk_status st;
+                memset(&r1, 0, sizeof r1);
+                memset(&r2, 0, sizeof r2);
+                memset(&m1, 0, sizeof m1);
+                memset(&m2, 0, sizeof m2);
+                MK_ASSERT_STATUS(mk_pose_from_transform(xa, &pa), MK_OK);
+                MK_ASSERT_STATUS(mk_pose_from_transform(xb, &pb), MK_OK);
+                st = mk_distance(&sh[t], xa, &sh[u], xb, NULL, &r1);
+                MK_ASSERT_STATUS(mk_distance_pose(&sh[t], &pa, &sh[u], &pb, NULL, &r2), st);
+                ck_assert_msg(memcmp(&r1, &r2, sizeof r1) == 0, "types %d, %d: mk_distance differs from mk_distance_pose", t, u);
+                st = mk_overlap(&sh[t], xa, &sh[u], xb, NULL, &o1);
+                MK_ASSERT_STATUS(mk_overlap_pose(&sh[t], &pa, &sh[u], &pb, NULL, &o2), st);
+                if (st == MK_OK) ck_assert_int_eq(o1, o2);
+                st = mk_collide(&sh[t], xa, &sh[u], xb, MK_REAL(0.1), NULL, &m1);
+                MK_ASSERT_STATUS(mk_collide_pose(&sh[t], &pa, &sh[u], &pb, MK_REAL(0.1), NULL, &m2), st);
+                ck_assert_msg(memcmp(&m1, &m2, sizeof m1) == 0, "types %d, %d: mk_collide differs from mk_collide_pose", t, u);
+            }
+        }
+    }
+    mk_hull_destroy(hull);
+}
+END_TEST
+
+START_TEST(unchecked_poses_refused)
+{
+    mk_shape s, bad;
+    mk_pose good, raw;
+    mk_distance_result r, before;
+    mk_manifold m;
+    int ov = 7;
+    mk_shape_sphere(1, &s);
+    bad = s;
+    bad.radius = -1;
+    MK_ASSERT_STATUS(mk_pose_from_transform(xf(0, 0, 3), &good), MK_OK);
+    memset(&raw, 0, sizeof raw); /* a hand-filled pose: identity, at the origin, never checked */
+    raw.r = mk_mat3_identity();
+    memset(&r, 0x5a, sizeof r);
+    before = r;
+    MK_ASSERT_STATUS(mk_distance_pose(&s, &raw, &s, &good, NULL, &r), MK_ERR_UNCHECKED_POSE);
+    MK_ASSERT_STATUS(mk_distance_pose(&s, &good, &s, &raw, NULL, &r), MK_ERR_UNCHECKED_POSE);
+    MK_ASSERT_STATUS(mk_distance_pose(&bad, &raw, &s, &good, NULL, &r), MK_ERR_BAD_SIZE); /* shapes are named first */
+    MK_ASSERT_STATUS(mk_distance_pose(&s, NULL, &s, &good, NULL, &r), MK_ERR_NULL);
+    ck_assert(memcmp(&r, &before, sizeof r) == 0);
+    MK_ASSERT_STATUS(mk_overlap_pose(&s, &good, &s, &raw, NULL, &ov), MK_ERR_UNCHECKED_POSE);
+    MK_ASSERT_STATUS(mk_overlap_pose(&s, &good, &s, NULL, NULL, &ov), MK_ERR_NULL);
+    ck_assert_int_eq(ov, 7);
+    MK_ASSERT_STATUS(mk_collide_pose(&s, &raw, &s, &good, 0, NULL, &m), MK_ERR_UNCHECKED_POSE);
+    MK_ASSERT_STATUS(mk_collide_pose(&s, &good, &s, NULL, 0, NULL, &m), MK_ERR_NULL);
+    /* The same pose, checked: answered. */
+    MK_ASSERT_STATUS(mk_pose_from_matrix(raw.r, raw.p, &raw), MK_OK);
+    MK_ASSERT_STATUS(mk_distance_pose(&s, &raw, &s, &good, NULL, &r), MK_OK);
+    MK_ASSERT_NEAR(r.distance, 1, TOL);
+}
+END_TEST
+
+/* MK_MAX_COORD (math3d.h): shapes of the largest accepted size at opposite
+ * corners of the accepted cube are answered with finite numbers by every
+ * query (the bound is chosen so the quartic products of GJK stay finite);
+ * a coordinate just beyond it is refused with MK_ERR_OUT_OF_RANGE by every
+ * entry that takes a position. */
+/* Small shapes: unit ones in double; in float, shapes 1e-5 of the bound, so
+ * they still span a few hundred ulps of their position (a unit shape at
+ * 1e8 is below float's resolution there, 8 units). */
+#if defined(MK_SINGLE)
+#  define SMALL (MK_MAX_COORD * MK_REAL(1e-5))
+#else
+#  define SMALL 1
+#endif
+START_TEST(coordinate_range_in_every_entry)
+{
+    const mk_real B = MK_MAX_COORD, beyond = MK_MAX_COORD * (1 + 2 * MK_REAL_EPSILON), S = MK_MAX_SIZE;
+    static const mk_vec3 cube[8] = {{-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {-1, 1, 1}, {1, 1, 1}};
+    mk_vec3 big_cube[8];
+    mk_hull *hull = NULL;
+    mk_shape sh[2][MK_SHAPE_TYPE_COUNT];
+    mk_rng rng = {41};
+    mk_transform lo = xfq(mk_v3(-B, -B, -B), mk_rng_quat(&rng)), hi = xfq(mk_v3(B, B, B), mk_rng_quat(&rng));
+    mk_transform far = xf(0, beyond, 0);
+    int t, u, z, k;
+    for (k = 0; k < 8; ++k) big_cube[k] = mk_v3_scale(cube[k], S);
+    MK_ASSERT_STATUS(mk_hull_create(big_cube, 8, NULL, &hull), MK_OK);
+    for (z = 0; z < 2; ++z) { /* small shapes, then the largest sizes accepted */
+        mk_real m = z ? S : SMALL;
+        mk_shape_sphere(m, &sh[z][MK_SHAPE_SPHERE]);
+        mk_shape_box(mk_v3(m, m, m), z ? S : 0, &sh[z][MK_SHAPE_BOX]);
+        mk_shape_capsule(m, m, &sh[z][MK_SHAPE_CAPSULE]);
+        mk_shape_cylinder(m, m, z ? S : 0, &sh[z][MK_SHAPE_CYLINDER]);
+        mk_shape_cone(m, m, z ? S : 0, &sh[z][MK_SHAPE_CONE]);
+        mk_shape_hull(hull, z ? S : 0, &sh[z][MK_SHAPE_HULL]);
+        mk_shape_plane(mk_v3_normalize(mk_v3(1, 1, 1)), -B, &sh[z][MK_SHAPE_PLANE]);
+    }
+    for (z = 0; z < 2; ++z) {
+        for (t = 0; t < MK_SHAPE_TYPE_COUNT; ++t) {
+            for (u = 0; u < MK_SHAPE_TYPE_COUNT; ++u) {
+                const mk_shape *a = &sh[z][t], *b = &sh[z][u];
+                mk_distance_result r;
+                mk_manifold m;
+                mk_real ad;
+                int ov, i;
+                mk_status st = mk_distance(a, lo, b, hi, NULL, &r);
+                if (t == MK_SHAPE_PLANE && u == MK_SHAPE_PLANE) continue;
+                MK_ASSERT_STATUS(st, MK_OK);
+                ck_assert_msg(mk_real_is_valid(r.distance) && mk_v3_is_valid(r.normal) && mk_v3_is_valid(r.point_a) &&
+                                  mk_v3_is_valid(r.point_b),
+                              "size %d, types %d, %d: distance %g", z, t, u, (double)r.distance);
+                MK_ASSERT_STATUS(mk_overlap(a, lo, b, hi, NULL, &ov), MK_OK);
+                st = mk_collide(a, lo, b, hi, 0, NULL, &m);
+                ck_assert(st == MK_OK || st == MK_ERR_UNSUPPORTED);
+                for (i = 0; st == MK_OK && i < m.count; ++i)
+                    ck_assert(mk_real_is_valid(m.points[i].depth) && mk_v3_is_valid(m.points[i].point_a));
+                st = mk_approx_distance(a, lo, b, hi, &ad);
+                ck_assert(st == MK_ERR_UNSUPPORTED || (st == MK_OK && mk_real_is_valid(ad)));
+                /* Beyond the bound, in either argument. */
+                MK_ASSERT_STATUS(mk_distance(a, far, b, hi, NULL, &r), MK_ERR_OUT_OF_RANGE);
+                MK_ASSERT_STATUS(mk_distance(a, lo, b, far, NULL, &r), MK_ERR_OUT_OF_RANGE);
+                MK_ASSERT_STATUS(mk_overlap(a, far, b, hi, NULL, &ov), MK_ERR_OUT_OF_RANGE);
+                MK_ASSERT_STATUS(mk_collide(a, lo, b, far, 0, NULL, &m), MK_ERR_OUT_OF_RANGE);
+                MK_ASSERT_STATUS(mk_approx_distance(a, far, b, hi, &ad), MK_ERR_OUT_OF_RANGE);
+            }
+        }
+    }
+    /* The single-shape entries. */
+    {
+        const mk_shape *box = &sh[1][MK_SHAPE_BOX]; /* large enough to be hit at float resolution there */
+        mk_aabb bb;
+        mk_ray_hit h;
+        mk_sweep sw;
+        mk_pose p;
+        MK_ASSERT_STATUS(mk_shape_aabb(box, hi, &bb), MK_OK);
+        MK_ASSERT_STATUS(mk_shape_aabb(box, far, &bb), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_raycast(box, hi, mk_v3(-B, -B, -B), mk_v3(2 * B, 2 * B, 2 * B), &h), MK_OK);
+        ck_assert(h.hit && mk_real_is_valid(h.fraction));
+        MK_ASSERT_STATUS(mk_raycast(box, far, mk_v3_zero(), mk_v3(1, 0, 0), &h), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_raycast(box, hi, mk_v3(0, 0, beyond), mk_v3(0, 0, -1), &h), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_raycast(box, hi, mk_v3(0, 0, 0), mk_v3(0, 0, beyond), &h), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_shape_cast(box, lo, mk_v3(2 * B, 2 * B, 2 * B), box, hi, &h), MK_OK);
+        ck_assert(mk_real_is_valid(h.fraction));
+        MK_ASSERT_STATUS(mk_shape_cast(box, far, mk_v3(1, 0, 0), box, hi, &h), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_shape_cast(box, lo, mk_v3(0, 0, 3 * B), box, hi, &h), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_sweep_from_transforms(lo, hi, mk_v3_zero(), &sw), MK_OK);
+        MK_ASSERT_STATUS(mk_sweep_from_transforms(lo, far, mk_v3_zero(), &sw), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_sweep_from_velocity(far, mk_v3_zero(), mk_v3_zero(), 1, mk_v3_zero(), &sw), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_sweep_from_velocity(hi, mk_v3(B, 0, 0), mk_v3_zero(), 1, mk_v3_zero(), &sw), MK_ERR_OUT_OF_RANGE);
+        MK_ASSERT_STATUS(mk_pose_from_transform(far, &p), MK_ERR_OUT_OF_RANGE);
     }
     mk_hull_destroy(hull);
 }
@@ -842,6 +1030,9 @@ static Suite *distance_suite(void)
     tcase_add_test(tc, shapes_against_plane);
     tcase_add_test(tc, bad_input_statuses);
     tcase_add_test(tc, quick_test_matches_diagnosis);
+    tcase_add_test(tc, pose_path_matches_transform_path);
+    tcase_add_test(tc, unchecked_poses_refused);
+    tcase_add_test(tc, coordinate_range_in_every_entry);
     tcase_add_test(tc, dispatch_reports_method);
     tcase_add_test(tb, box_box_against_oracle);
     tcase_add_test(tb, box_corner_at_box_edge);

@@ -337,6 +337,54 @@ START_TEST(box_surface_clouds)
 }
 END_TEST
 
+static int face_vertex_count(const mk_hull *h, int f)
+{
+    int e0 = h->face_edge[f], e = e0, n = 0;
+    do ++n, e = h->edges[e].next;
+    while (e != e0);
+    return n;
+}
+
+START_TEST(cylinder_clouds_get_polygon_caps)
+{
+    /* k points on each of two circles (a prism around a cylinder), rotated
+     * and moved so the points of a cap are coplanar only to rounding: the
+     * caps must come out as one k-gon each (not a fan of triangles that a
+     * resting hull's contact face would flip between) and the sides as k
+     * quadrilaterals, every vertex kept. */
+    mk_rng r = {15};
+    int ks[] = {3, 5, 8, 16, 33, 64}, t, rep;
+    for (t = 0; t < 6; ++t)
+        for (rep = 0; rep < 8; ++rep) {
+            int k = ks[t], i, f, caps = 0, quads = 0;
+            mk_vec3 p[128];
+            mk_quat q = rep == 0 ? mk_quat_identity() : mk_rng_quat(&r);
+            mk_vec3 off = rep < 4 ? mk_v3_zero() : mk_rng_v3(&r, -20, 20), axis = mk_quat_rotate(q, mk_v3(0, 0, 1));
+            double radius = mk_rng_range(&r, 0.05, 2), hh = mk_rng_range(&r, 0.01, 2), phase = mk_rng_unit(&r);
+            mk_hull *h;
+            for (i = 0; i < k; ++i) {
+                double a = 2 * 3.14159265358979323846 * (i + phase) / k;
+                mk_vec3 c = mk_v3((mk_real)(radius * cos(a)), (mk_real)(radius * sin(a)), 0);
+                p[2 * i] = mk_v3_add(mk_quat_rotate(q, mk_v3(c.x, c.y, (mk_real)hh)), off);
+                p[2 * i + 1] = mk_v3_add(mk_quat_rotate(q, mk_v3(c.x, c.y, (mk_real)-hh)), off);
+            }
+            shuffle(&r, p, 2 * k);
+            h = make_ok(p, 2 * k, 0);
+            ck_assert_int_eq(h->vertex_count, 2 * k);
+            ck_assert_int_eq(h->face_count, k + 2);
+            for (f = 0; f < h->face_count; ++f) {
+                int n = face_vertex_count(h, f);
+                mk_real along = mk_v3_dot(h->planes[f].normal, axis);
+                if (n == k && mk_fabs_(mk_fabs_(along) - 1) < 1e3 * MK_REAL_EPSILON) ++caps;
+                else if (n == 4 && mk_fabs_(along) < 1e3 * MK_REAL_EPSILON) ++quads;
+            }
+            ck_assert_int_eq(caps, 2);
+            ck_assert_int_eq(quads, k);
+            mk_hull_destroy(h);
+        }
+}
+END_TEST
+
 START_TEST(random_clouds)
 {
     /* Ball, sphere, ellipsoids up to 10:1, 4 ... 4096 points, some offset far
@@ -644,6 +692,7 @@ static Suite *hull_suite(void)
     tcase_set_timeout(tc, 60);
     tcase_add_test(tc, cube_with_face_centres_and_edge_midpoints);
     tcase_add_test(tc, box_surface_clouds);
+    tcase_add_test(tc, cylinder_clouds_get_polygon_caps);
     tcase_add_test(tc, random_clouds);
     tcase_add_test(tc, duplicates_and_interior_points);
     tcase_add_test(tc, nearly_flat_and_thin_clouds);

@@ -1,4 +1,5 @@
 /* test_math.c: math3d, status strings, version. */
+#include <math.h>
 #include <string.h>
 
 #include "minko/math3d.h"
@@ -128,6 +129,117 @@ START_TEST(aabb_closed_intervals)
 }
 END_TEST
 
+/* Largest |r^T r - I| entry. */
+static double orthonormality_error(mk_mat3 r)
+{
+    double e = fabs((double)mk_v3_len2(r.c0) - 1);
+    e = fmax(e, fabs((double)mk_v3_len2(r.c1) - 1));
+    e = fmax(e, fabs((double)mk_v3_len2(r.c2) - 1));
+    e = fmax(e, fabs((double)mk_v3_dot(r.c0, r.c1)));
+    e = fmax(e, fabs((double)mk_v3_dot(r.c0, r.c2)));
+    return fmax(e, fabs((double)mk_v3_dot(r.c1, r.c2)));
+}
+
+START_TEST(pose_from_transform)
+{
+    mk_rng r = {21};
+    mk_pose p, before;
+    int i;
+    for (i = 0; i < 1000; ++i) {
+        mk_quat q = mk_rng_quat(&r);
+        mk_real g = (mk_real)mk_rng_range(&r, 1 - MK_QUAT_TOLERANCE / 3, 1 + MK_QUAT_TOLERANCE / 3); /* drifted, accepted */
+        mk_vec3 x = mk_rng_v3(&r, -100, 100), v = mk_rng_v3(&r, -1, 1);
+        MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(x, mk_quat_make(q.x * g, q.y * g, q.z * g, q.w * g)), &p), MK_OK);
+        /* The exact rotation of q / |q|: orthonormal to rounding whatever the drift. */
+        ck_assert(orthonormality_error(p.r) <= 16 * MK_REAL_EPSILON);
+        MK_ASSERT_V3_NEAR(mk_mat3_mul_v3(p.r, v), mk_quat_rotate(q, v), 64 * MK_REAL_EPSILON);
+        ck_assert(p.p.x == x.x && p.p.y == x.y && p.p.z == x.z);
+    }
+    memset(&p, 0x5a, sizeof p);
+    before = p;
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_identity(), NULL), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(mk_v3(0, (mk_real)NAN, 0), mk_quat_identity()), &p), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(mk_v3_zero(), mk_quat_make(0, (mk_real)INFINITY, 0, 1)), &p),
+                     MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(mk_v3_zero(), mk_quat_make(0, 0, 0, 1 + 2 * MK_QUAT_TOLERANCE)), &p),
+                     MK_ERR_BAD_ROTATION);
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(mk_v3(0, 0, -2 * MK_MAX_COORD), mk_quat_identity()), &p),
+                     MK_ERR_OUT_OF_RANGE);
+    ck_assert(memcmp(&p, &before, sizeof p) == 0); /* untouched on error */
+}
+END_TEST
+
+START_TEST(pose_from_matrix)
+{
+    mk_rng r = {22};
+    mk_pose p, before;
+    mk_mat3 m;
+    int i;
+    for (i = 0; i < 1000; ++i) {
+        mk_quat q = mk_rng_quat(&r);
+        mk_vec3 x = mk_rng_v3(&r, -100, 100), v = mk_rng_v3(&r, -1, 1);
+        m = mk_mat3_from_quat(q);
+        /* A host's matrix, orthonormal to rounding: kept exactly. */
+        MK_ASSERT_STATUS(mk_pose_from_matrix(m, x, &p), MK_OK);
+        ck_assert(memcmp(&p.r, &m, sizeof m) == 0);
+        /* Drifted by a quarter of the tolerance in every entry (what a float
+         * host widened to double, or a long-integrated matrix, looks like):
+         * accepted, and replaced by an exact rotation close to it. */
+        m.c0 = mk_v3_add(m.c0, mk_v3_scale(mk_rng_v3(&r, -1, 1), MK_ROTATION_TOLERANCE / 8));
+        m.c1 = mk_v3_add(m.c1, mk_v3_scale(mk_rng_v3(&r, -1, 1), MK_ROTATION_TOLERANCE / 8));
+        m.c2 = mk_v3_add(m.c2, mk_v3_scale(mk_rng_v3(&r, -1, 1), MK_ROTATION_TOLERANCE / 8));
+        MK_ASSERT_STATUS(mk_pose_from_matrix(m, x, &p), MK_OK);
+        ck_assert_msg(orthonormality_error(p.r) <= 16 * MK_REAL_EPSILON, "orthonormality %g", orthonormality_error(p.r));
+        ck_assert(mk_v3_dot(p.r.c2, mk_v3_cross(p.r.c0, p.r.c1)) > 0);
+        MK_ASSERT_V3_NEAR(mk_mat3_mul_v3(p.r, v), mk_quat_rotate(q, v), 4 * MK_ROTATION_TOLERANCE);
+    }
+    memset(&p, 0x5a, sizeof p);
+    before = p;
+    m = mk_mat3_identity();
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), NULL), MK_ERR_NULL);
+    m.c1.z = (mk_real)NAN;
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_NOT_FINITE);
+    m = mk_mat3_identity();
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3((mk_real)INFINITY, 0, 0), &p), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3(0, 2 * MK_MAX_COORD, 0), &p), MK_ERR_OUT_OF_RANGE);
+    m.c2 = mk_v3(0, 0, -1); /* a reflection: orthonormal, det -1 */
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_BAD_ROTATION);
+    m = mk_mat3_identity();
+    m.c0.x = 1 + 2 * MK_ROTATION_TOLERANCE; /* scaled */
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_BAD_ROTATION);
+    m = mk_mat3_identity();
+    m.c1.x = 2 * MK_ROTATION_TOLERANCE; /* sheared */
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_BAD_ROTATION);
+    m = mk_mat3_cols(mk_v3_zero(), mk_v3_zero(), mk_v3_zero());
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_BAD_ROTATION);
+    ck_assert(memcmp(&p, &before, sizeof p) == 0); /* untouched on error */
+}
+END_TEST
+
+/* The coordinate bound is inclusive and exact in both precisions: +-MK_MAX_COORD
+ * passes, the next representable number beyond it does not. */
+START_TEST(coordinate_bound)
+{
+    const mk_real b = MK_MAX_COORD;
+#if defined(MK_SINGLE)
+    const mk_real beyond = nextafterf(b, (mk_real)INFINITY);
+#else
+    const mk_real beyond = nextafter(b, (mk_real)INFINITY);
+#endif
+    mk_pose p;
+    ck_assert(mk_position_is_valid(mk_v3(b, -b, b)));
+    ck_assert(!mk_position_is_valid(mk_v3(beyond, 0, 0)));
+    ck_assert(!mk_position_is_valid(mk_v3(0, -beyond, 0)));
+    ck_assert(!mk_position_is_valid(mk_v3(0, 0, (mk_real)NAN)));
+    ck_assert(mk_transform_is_valid(mk_transform_make(mk_v3(-b, b, -b), mk_quat_identity())));
+    ck_assert(!mk_transform_is_valid(mk_transform_make(mk_v3(0, 0, beyond), mk_quat_identity())));
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(mk_v3(b, b, -b), mk_quat_identity()), &p), MK_OK);
+    MK_ASSERT_STATUS(mk_pose_from_matrix(mk_mat3_identity(), mk_v3(-b, b, b), &p), MK_OK);
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(mk_v3(b, -beyond, b), mk_quat_identity()), &p), MK_ERR_OUT_OF_RANGE);
+    MK_ASSERT_STATUS(mk_pose_from_matrix(mk_mat3_identity(), mk_v3(-beyond, 0, 0), &p), MK_ERR_OUT_OF_RANGE);
+}
+END_TEST
+
 static Suite *math_suite(void)
 {
     Suite *s = suite_create("math");
@@ -141,6 +253,9 @@ static Suite *math_suite(void)
     tcase_add_test(tc, quaternion_validation);
     tcase_add_test(tc, transforms_compose);
     tcase_add_test(tc, aabb_closed_intervals);
+    tcase_add_test(tc, pose_from_transform);
+    tcase_add_test(tc, pose_from_matrix);
+    tcase_add_test(tc, coordinate_bound);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -64,6 +64,10 @@ mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map);
 
 // World pose of the mapped shape for a Bullet world transform.
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map);
+// The same as a checked pose made from Bullet's rotation matrix (no
+// quaternion): MK_ERR_BAD_ROTATION, MK_ERR_NOT_FINITE or MK_ERR_OUT_OF_RANGE
+// as mk_pose_from_matrix.
+mk_status minko_pose(const btTransform &world, const ShapeMap &map, mk_pose *out);
 
 // A btBroadphaseInterface on a Minko broadphase (minko/broadphase.h: SAP,
 // hierarchical grid, or the automatic choice). Bullet's own

@@ -81,7 +81,9 @@ mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map)
         if (static_cast<const btSphereShape *>(shape)->getRadius() == m.radius) return MK_OK;
         break;
     case BOX_SHAPE_PROXYTYPE: {
-        const btVector3 h = static_cast<const btBoxShape *>(shape)->getHalfExtentsWithMargin();
+        // getHalfExtentsWithMargin() less its three virtual getMargin() calls.
+        const btScalar margin = shape->getMargin();
+        const btVector3 h = static_cast<const btBoxShape *>(shape)->getHalfExtentsWithoutMargin() + btVector3(margin, margin, margin);
         if (h.x() == m.u.half_extents.x && h.y() == m.u.half_extents.y && h.z() == m.u.half_extents.z) return MK_OK;
         break;
     }
@@ -95,6 +97,18 @@ mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map)
     default: break;
     }
     return map_primitive(shape, map);
+}
+
+mk_status minko_pose(const btTransform &world, const ShapeMap &map, mk_pose *out)
+{
+    btMatrix3x3 r = world.getBasis();
+    const mk_quat &ax = map.axis;
+    if (ax.x != 0 || ax.y != 0 || ax.z != 0) r *= btMatrix3x3(btQuaternion(ax.x, ax.y, ax.z, ax.w));
+    mk_mat3 m;
+    m.c0 = to_mk(r.getColumn(0));
+    m.c1 = to_mk(r.getColumn(1));
+    m.c2 = to_mk(r.getColumn(2));
+    return mk_pose_from_matrix(m, to_mk(world.getOrigin()), out);
 }
 
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map)

@@ -131,6 +131,31 @@ START_TEST(shape_pose)
     mk_vec3 top = mk_transform_point(t, mk_v3(0, 0, 1));  // Minko segment end +h
     btVector3 want = xf * btVector3(0, 1, 0);
     MK_ASSERT_V3_NEAR(top, mkb::to_mk(want), 1e-5);
+    // The checked pose from Bullet's matrix is the same placement, for every
+    // axis rotation; a scaled matrix is refused.
+    btCapsuleShapeX cx(btScalar(0.25), 1);
+    btCapsuleShapeZ cz(btScalar(0.25), 1);
+    mk_rng rng = {99};
+    for (const btCollisionShape *s : {(const btCollisionShape *)&c, (const btCollisionShape *)&cx, (const btCollisionShape *)&cz}) {
+        MK_ASSERT_STATUS(mkb::map_primitive(s, &m), MK_OK);
+        for (int k = 0; k < 20; k++) {
+            mk_vec3 ax = mk_rng_dir(&rng);
+            btTransform x(btQuaternion(mkb::to_bt(ax), btScalar(mk_rng_range(&rng, -3, 3))),
+                          btVector3(btScalar(mk_rng_range(&rng, -9, 9)), btScalar(mk_rng_range(&rng, -9, 9)), 2));
+            mk_pose p;
+            MK_ASSERT_STATUS(mkb::minko_pose(x, m, &p), MK_OK);
+            const mk_transform tq = mkb::minko_pose(x, m);
+            for (int i = 0; i < 3; i++) {
+                const mk_vec3 local = mk_v3(i == 0, i == 1, i == 2);
+                const mk_vec3 by_matrix = mk_v3_add(mk_mat3_mul_v3(p.r, local), p.p);
+                MK_ASSERT_V3_NEAR(by_matrix, mk_transform_point(tq, local), 1e-5);
+            }
+        }
+    }
+    btTransform scaled = xf;
+    scaled.setBasis(scaled.getBasis().scaled(btVector3(btScalar(1.1), btScalar(1.1), btScalar(1.1))));
+    mk_pose p;
+    MK_ASSERT_STATUS(mkb::minko_pose(scaled, m, &p), MK_ERR_BAD_ROTATION);
 }
 END_TEST
 

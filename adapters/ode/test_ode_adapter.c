@@ -567,6 +567,55 @@ END_TEST
  * form must agree on the normal and the depth (ODE puts pos on the box's
  * surface, or at the centre of a sphere inside the box; Minko midway
  * between the surfaces, also a point of the overlap). */
+/* Sphere against a plane, from well above to well below it (ODE's SAP
+ * space hands the collider every geom-plane pair, AABBs apart or not): the
+ * same contact count as dCollide, the same depth, normal and point. The
+ * level plane has a finite AABB top, the tilted one none. */
+START_TEST(test_sphere_plane_matches_ode)
+{
+    mk_rng r = {0x0de0480u};
+    dGeomID planes[2];
+    int k;
+    long long before;
+    dInitODE2(0);
+    planes[0] = dCreatePlane(0, 0, 0, 1, 0.4);
+    planes[1] = dCreatePlane(0, 0.2, -0.1, 1, 0.4);
+    before = minko_calls();
+    for (k = 0; k < 200; k++) {
+        dGeomID plane = planes[k % 2];
+        dContactGeom nat[MAXC], got[MAXC];
+        double radius = mk_rng_range(&r, 0.1, 1), h = mk_rng_range(&r, -0.5, 3) * radius;
+        dGeomID a = dCreateSphere(0, radius);
+        dVector4 p;
+        int nn, ng, j;
+        dGeomPlaneGetParams(plane, p); /* unit normal, as ODE keeps it */
+        dGeomSetPosition(a, mk_rng_range(&r, -5, 5), mk_rng_range(&r, -5, 5), 0);
+        {
+            const dReal *c = dGeomGetPosition(a);
+            double off = p[3] - (p[0] * c[0] + p[1] * c[1] + p[2] * c[2]) + h;
+            dGeomSetPosition(a, c[0] + off * p[0], c[1] + off * p[1], c[2] + off * p[2]);
+        }
+        nn = dCollide(a, plane, MAXC, nat, sizeof(dContactGeom));
+        ng = mk_ode_collide(a, plane, MAXC, got, sizeof(dContactGeom));
+        ck_assert_int_eq(ng, nn);
+        assert_conventions(got, ng, sizeof(dContactGeom), a, plane);
+        if (ng) {
+            MK_ASSERT_NEAR(got[0].depth, nat[0].depth, TOL);
+            /* ODE's point is the sphere's deepest one, Minko's halfway to the plane */
+            for (j = 0; j < 3; j++) {
+                MK_ASSERT_NEAR(got[0].normal[j], nat[0].normal[j], TOL);
+                MK_ASSERT_NEAR(got[0].pos[j], nat[0].pos[j] + 0.5 * nat[0].depth * nat[0].normal[j], TOL * 4);
+            }
+        }
+        dGeomDestroy(a);
+    }
+    ck_assert_int_eq((int)(minko_calls() - before), 200); /* Minko answered, not a fallback */
+    dGeomDestroy(planes[0]);
+    dGeomDestroy(planes[1]);
+    mk_ode_close();
+}
+END_TEST
+
 START_TEST(test_sphere_box_matches_ode)
 {
     mk_rng r = {0x0de0450u};
@@ -1056,6 +1105,7 @@ int main(void)
     tcase_add_test(bp, test_hash_space_bug);
     tcase_add_test(bp, test_space_bad_input);
     tcase_add_test(np, test_sphere_sphere_matches_ode);
+    tcase_add_test(np, test_sphere_plane_matches_ode);
     tcase_add_test(np, test_sphere_box_matches_ode);
     tcase_add_test(np, test_box_box_matches_ode);
     tcase_add_test(np, test_pair_cache);

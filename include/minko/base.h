@@ -83,7 +83,7 @@ static const int *const mk_abi_guard_ __attribute__((used)) = &MK_ABI_SYMBOL;
     X(1,  MK_ERR_NULL,           "a required pointer argument is NULL") \
     X(2,  MK_ERR_NOT_FINITE,     "an input number is NaN or infinite") \
     X(3,  MK_ERR_BAD_SIZE,       "a size, radius or extent is zero, negative or out of range") \
-    X(4,  MK_ERR_BAD_ROTATION,   "a rotation quaternion is not unit length") \
+    X(4,  MK_ERR_BAD_ROTATION,   "a rotation is not proper (quaternion not unit length, or matrix not orthonormal with determinant +1)") \
     X(5,  MK_ERR_BAD_NORMAL,     "a plane or direction vector is zero or not unit length") \
     X(6,  MK_ERR_DEGENERATE,     "the input is degenerate (coincident, collinear or coplanar points)") \
     X(7,  MK_ERR_CAPACITY,       "a fixed capacity would be exceeded") \
@@ -92,7 +92,9 @@ static const int *const mk_abi_guard_ __attribute__((used)) = &MK_ABI_SYMBOL;
     X(10, MK_ERR_BAD_SHAPE,      "the shape type is unknown or its data is invalid") \
     X(11, MK_ERR_UNSUPPORTED,    "the operation is not supported for these shapes or was left out of this build") \
     X(12, MK_ERR_BAD_AABB,       "an AABB has lo > hi or non-finite bounds") \
-    X(13, MK_ERR_BAD_ARGUMENT,   "an argument is out of its documented range")
+    X(13, MK_ERR_BAD_ARGUMENT,   "an argument is out of its documented range") \
+    X(14, MK_ERR_OUT_OF_RANGE,   "a position coordinate is beyond MK_MAX_COORD (minko/math3d.h)") \
+    X(15, MK_ERR_UNCHECKED_POSE, "the mk_pose was not made by mk_pose_from_transform or mk_pose_from_matrix")
 
 typedef enum mk_status {
 #define MK_STATUS_ENUM_(code, name, msg) name = code,

@@ -19,8 +19,14 @@
  * answered. Iterative methods carry hard caps; `result.state` says whether the
  * answer converged, hit the cap (the answer is then the best bound found), or
  * met a degenerate configuration it resolved by a fallback. Bad input (NULL,
- * NaN/Inf, non-unit rotations, invalid shapes) returns a status and leaves
- * *out untouched. Nothing here allocates. Plane-plane pairs are unsupported.
+ * NaN/Inf, non-unit rotations, coordinates beyond MK_MAX_COORD, invalid
+ * shapes) returns a status and leaves *out untouched. Each query comes in two
+ * forms with one implementation: the _pose form takes poses checked once by
+ * mk_pose_from_transform / mk_pose_from_matrix (minko/math3d.h) and only
+ * reads their tag (MK_ERR_UNCHECKED_POSE otherwise), which is what an engine
+ * that keeps rotation matrices calls; the mk_transform form checks and
+ * converts its two transforms, then runs the same code. Nothing here
+ * allocates. Plane-plane pairs are unsupported.
  */
 #ifndef MINKO_DISTANCE_H
 #define MINKO_DISTANCE_H
@@ -65,6 +71,8 @@ typedef struct mk_distance_result {
 
 MK_API mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb,
                              mk_gjk_cache *cache, mk_distance_result *out);
+MK_API mk_status mk_distance_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
+                                  mk_gjk_cache *cache, mk_distance_result *out);
 
 /* Boolean overlap (touching counts as overlapping). Cheaper than mk_distance:
  * GJK stops as soon as a separating axis or a containing simplex is found.
@@ -72,6 +80,8 @@ MK_API mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape 
  * (|distance| of a few ulps of the shapes' size), where either is correct. */
 MK_API mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb,
                             mk_gjk_cache *cache, int *overlapping);
+MK_API mk_status mk_overlap_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
+                                 mk_gjk_cache *cache, int *overlapping);
 
 /* Seed 003's approximate distance: from A's vertex facing B, walk to the
  * vertex of B nearest it, then back to the vertex of A nearest that; answers

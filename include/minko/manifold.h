@@ -147,6 +147,12 @@ typedef struct mk_manifold_cache {
  * also report points separated by up to this distance (speculative). */
 MK_API mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb,
                             mk_real margin, mk_manifold_cache *cache, mk_manifold *out);
+/* The same for poses checked once by mk_pose_from_transform /
+ * mk_pose_from_matrix (minko/math3d.h): no quaternion check or conversion per
+ * call; an unchecked pose gives MK_ERR_UNCHECKED_POSE. mk_collide is this
+ * after checking and converting its two transforms. */
+MK_API mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
+                                 mk_real margin, mk_manifold_cache *cache, mk_manifold *out);
 
 #ifdef __cplusplus
 }

@@ -1,15 +1,22 @@
-/* minko/math3d.h: vectors, quaternions, 3x3 matrices, rigid transforms, AABBs.
+/* minko/math3d.h: vectors, quaternions, 3x3 matrices, rigid transforms, poses, AABBs.
  *
- * Contract. Plain structs passed by value; every function is C99 `inline`
- * here and also exported from the library under the same name. No function
- * allocates, reads global state or asserts. Functions that can meet a
- * degenerate input say what they return for it (mk_v3_normalize of a zero
- * vector returns the zero vector). Validators (mk_*_is_valid) are the
- * checks every public entry point applies to its inputs. A quaternion is
- * accepted as a rotation when | |q|^2 - 1 | <= MK_QUAT_TOLERANCE; queries
- * then renormalise it, so a slightly drifted quaternion costs no accuracy.
- * Matrices are stored by columns: m.c0, m.c1, m.c2 are the images of the
- * x, y and z axes.
+ * Contract. Plain structs passed by value; every function but the two pose
+ * constructors is C99 `inline` here and also exported from the library under
+ * the same name. No function allocates, reads global state or asserts.
+ * Functions that can meet a degenerate input say what they return for it
+ * (mk_v3_normalize of a zero vector returns the zero vector). Validators
+ * (mk_*_is_valid) are the checks every public entry point applies to its
+ * inputs. A quaternion is accepted as a rotation when
+ * | |q|^2 - 1 | <= MK_QUAT_TOLERANCE; queries then use the exact rotation of
+ * q / |q|, so a slightly drifted quaternion costs no accuracy. A position is
+ * accepted when every coordinate is within [-MK_MAX_COORD, MK_MAX_COORD]
+ * (below). Matrices are stored by columns: m.c0, m.c1, m.c2 are the images
+ * of the x, y and z axes. An mk_pose is a rotation matrix and a position
+ * checked once, by mk_pose_from_transform or mk_pose_from_matrix, so that
+ * the pose-taking queries (mk_distance_pose, mk_overlap_pose,
+ * mk_collide_pose) neither re-validate nor convert it: hosts that keep
+ * matrices (Bullet, ODE) pass them straight in, and a body's pose serves
+ * all its pairs.
  */
 #ifndef MINKO_MATH3D_H
 #define MINKO_MATH3D_H
@@ -28,15 +35,45 @@ typedef struct mk_mat3 { mk_vec3 c0, c1, c2; } mk_mat3;       /* columns */
 typedef struct mk_transform { mk_vec3 p; mk_quat q; } mk_transform; /* x -> q x q* + p */
 typedef struct mk_aabb { mk_vec3 lo, hi; } mk_aabb;           /* closed box [lo, hi] */
 
+/* A rigid pose checked once (see the contract): x -> r x + p. Read the
+ * fields freely; make it only with mk_pose_from_transform or
+ * mk_pose_from_matrix. `checked` records that it passed (a zeroed or
+ * hand-filled pose is refused by the queries with MK_ERR_UNCHECKED_POSE);
+ * writing r or p afterwards is not detected, so re-make the pose instead. */
+typedef struct mk_pose {
+    mk_mat3 r;        /* rotation: columns are the body's x, y, z axes in world, orthonormal, det +1 */
+    mk_vec3 p;        /* position of the body's origin, within MK_MAX_COORD */
+    unsigned checked; /* set by the constructors; do not write */
+} mk_pose;
+
+/* MK_MAX_COORD bounds every position coordinate a query accepts. The pair
+ * queries work in A's frame on t = R^T (p_b - p_a) plus shape sizes (at most
+ * MK_MAX_SIZE = 1e12 in double, 1e8 in float, per dimension): with every
+ * |p_i| <= B a coordinate there is below W = 2 sqrt(3) B + 3 MK_MAX_SIZE.
+ * The highest products formed are quartic (GJK's |n|^2 and n . (b x c) for n
+ * a cross product of simplex edges), at most 192 W^4, which must stay below
+ * MK_REAL_MAX: B = 1e75 in double (3e304 of 1.8e308), B = 1e8 in float
+ * (3.4e37 of 3.4e38). Beyond it a distance could come out infinite or NaN;
+ * such input gets MK_ERR_OUT_OF_RANGE. (Float's bound is also where its
+ * resolution, 8 units at 1e8, stops meaning anything.)
+ *
+ * MK_ROTATION_TOLERANCE is how far from orthonormal a matrix given to
+ * mk_pose_from_matrix may be: every entry of r^T r - I within it, and det r
+ * > 0. It equals MK_QUAT_TOLERANCE, so it admits what integrators produce
+ * (rounding-level drift, and a float host's matrix widened to double, about
+ * 1e-7) while refusing scaled, sheared or reflecting matrices. */
 #if defined(MK_SINGLE)
 #  define MK_QUAT_TOLERANCE 1e-4f
+#  define MK_MAX_COORD 1e8f
 #  define mk_sqrt_ sqrtf
 #  define mk_fabs_ fabsf
 #else
 #  define MK_QUAT_TOLERANCE 1e-6
+#  define MK_MAX_COORD 1e75
 #  define mk_sqrt_ sqrt
 #  define mk_fabs_ fabs
 #endif
+#define MK_ROTATION_TOLERANCE MK_QUAT_TOLERANCE
 
 /* ---- scalars ---- */
 MK_API MK_INLINE int mk_real_is_valid(mk_real a) { return a - a == a - a; } /* false for NaN and +-Inf */
@@ -71,6 +108,12 @@ MK_API MK_INLINE mk_vec3 mk_v3_normalize(mk_vec3 a)
     return (l > 0 && mk_real_is_valid(l)) ? mk_v3_scale(a, 1 / l) : mk_v3_zero();
 }
 MK_API MK_INLINE int mk_v3_is_valid(mk_vec3 a) { return mk_real_is_valid(a.x) && mk_real_is_valid(a.y) && mk_real_is_valid(a.z); }
+/* A position every query accepts: each coordinate finite and within
+ * MK_MAX_COORD (a NaN fails the comparisons). */
+MK_API MK_INLINE int mk_position_is_valid(mk_vec3 p)
+{
+    return mk_fabs_(p.x) <= MK_MAX_COORD && mk_fabs_(p.y) <= MK_MAX_COORD && mk_fabs_(p.z) <= MK_MAX_COORD;
+}
 /* Some unit vector perpendicular to the unit vector n (continuous except near one pole). */
 MK_API MK_INLINE mk_vec3 mk_v3_perp(mk_vec3 n)
 {
@@ -186,7 +229,23 @@ MK_API MK_INLINE mk_transform mk_transform_inv_mul(mk_transform a, mk_transform 
 {
     return mk_transform_make(mk_quat_inv_rotate(a.q, mk_v3_sub(b.p, a.p)), mk_quat_mul(mk_quat_conj(a.q), b.q));
 }
-MK_API MK_INLINE int mk_transform_is_valid(mk_transform t) { return mk_v3_is_valid(t.p) && mk_quat_is_valid(t.q); }
+MK_API MK_INLINE int mk_transform_is_valid(mk_transform t) { return mk_position_is_valid(t.p) && mk_quat_is_valid(t.q); }
+
+/* ---- checked poses ---- */
+/* The pose of a transform: its quaternion's exact rotation (of q / |q|) as a
+ * matrix. MK_ERR_NULL, MK_ERR_NOT_FINITE, MK_ERR_OUT_OF_RANGE (a coordinate
+ * beyond MK_MAX_COORD) or MK_ERR_BAD_ROTATION (| |q|^2 - 1 | >
+ * MK_QUAT_TOLERANCE) leave *out untouched. O(1), about 40 flops. */
+MK_API mk_status mk_pose_from_transform(mk_transform x, mk_pose *out);
+/* The pose of a host's rotation matrix r (columns: the body's axes in world)
+ * and position p. r must be orthonormal within MK_ROTATION_TOLERANCE with
+ * det r > 0, else MK_ERR_BAD_ROTATION; non-finite input gives
+ * MK_ERR_NOT_FINITE, a coordinate of p beyond MK_MAX_COORD
+ * MK_ERR_OUT_OF_RANGE; *out is then untouched. A matrix orthonormal to
+ * rounding (32 eps) is kept as it is; one that drifted further is replaced by
+ * its Gram-Schmidt orthonormalisation (x axis kept, then y), so queries
+ * always work with an exact rotation. O(1). */
+MK_API mk_status mk_pose_from_matrix(mk_mat3 r, mk_vec3 p, mk_pose *out);
 
 /* ---- AABBs ---- */
 MK_API MK_INLINE mk_aabb mk_aabb_make(mk_vec3 lo, mk_vec3 hi) { mk_aabb b; b.lo = lo; b.hi = hi; return b; }
