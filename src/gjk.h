@@ -92,30 +92,6 @@ MK_ALWAYS_INLINE mk_mat3 mk_rotation_of(mk_quat q)
                         mk_v3(s * (xz + wy), s * (yz - wx), 1 - s * (xx + yy)));
 }
 
-/* The image of the local z axis (capsule, cylinder and cone axes): the
- * third column of mk_rotation_of(q), without the other two. */
-MK_ALWAYS_INLINE mk_vec3 mk_axis_of(mk_quat q)
-{
-    mk_real s = mk_two_over_len2(q);
-    return mk_v3((q.x * q.z + q.w * q.y) * s, (q.y * q.z - q.w * q.x) * s, 1 - (q.x * q.x + q.y * q.y) * s);
-}
-
-/* B's pose in A's frame from A's world rotation ra (mk_rotation_of). */
-static inline mk_pair mk_pair_in(const mk_shape *a, mk_mat3 ra, mk_vec3 pa, const mk_shape *b, mk_transform xb)
-{
-    mk_pair p;
-    p.a = a;
-    p.b = b;
-    p.r = mk_mat3_tmul(ra, mk_rotation_of(xb.q));
-    p.t = mk_mat3_tmul_v3(ra, mk_v3_sub(xb.p, pa));
-    return p;
-}
-
-static inline mk_pair mk_pair_make(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb)
-{
-    return mk_pair_in(a, mk_rotation_of(xa.q), xa.p, b, xb);
-}
-
 /* Support of A - B along d (A's frame) for shapes of types ta, tb; ha, hb:
  * hints (previous vertex indices), returned as the new indices. */
 MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support_typed(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, mk_vec3 d,

@@ -48,4 +48,13 @@ MK_ALWAYS_INLINE mk_pair mk_pair_of_poses_(const mk_shape *a, const mk_pose *xa,
     return p;
 }
 
+/* The same pair from two accepted transforms (tests build pairs this way). */
+static inline mk_pair mk_pair_make(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb)
+{
+    mk_pose pa, pb;
+    mk_pose_set_(&pa, &xa);
+    mk_pose_set_(&pb, &xb);
+    return mk_pair_of_poses_(a, &pa, b, &pb);
+}
+
 #endif

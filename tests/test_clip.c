@@ -9,6 +9,7 @@
 
 #include "gjk.h"
 #include "manifold_internal.h"
+#include "pose.h"
 #include "support/mk_test.h"
 
 #if defined(MK_SINGLE)

@@ -1,6 +1,7 @@
 /* test_epa.c: EPA on overlapping cores: analytic depths, touching and flat
  * configurations, smooth shapes at the iteration cap, never NaN. */
 #include "epa.h"
+#include "pose.h"
 #include "minko/distance.h"
 #include "support/cases.h"
 #include "support/mk_test.h"

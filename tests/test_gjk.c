@@ -5,6 +5,7 @@
 
 #include "gjk.h"
 #include "minko/distance.h"
+#include "pose.h"
 #include "support/mk_test.h"
 
 /* Smooth cores converge to GJK's relative tolerance (1e4 eps). Near the

@@ -565,6 +565,24 @@ static void hinted(const mk_hull *a, const mk_hull *b, const mk_vec3 *boxes, con
     else mk_sat(a, b, R, t, o, out);
 }
 
+/* The pair of the hinted() tests: two boxes (half extents in hx) when
+ * `box`, else two ellipsoid hulls of n points that the caller destroys. */
+static void random_pair(mk_rng *r, int box, int n, mk_vec3 hx[2], mk_box_hull *A, mk_box_hull *B, mk_hull **ha, mk_hull **hb,
+                        const mk_hull **a, const mk_hull **b)
+{
+    if (box) {
+        hx[0] = mk_rng_v3(r, 0.2, 1);
+        hx[1] = mk_rng_v3(r, 0.2, 1);
+        mk_box_hull_init(A, hx[0]);
+        mk_box_hull_init(B, hx[1]);
+        *a = &A->hull;
+        *b = &B->hull;
+    } else {
+        *a = *ha = ellipsoid_hull(r, n, mk_rng_v3(r, 0.3, 1));
+        *b = *hb = ellipsoid_hull(r, n, mk_rng_v3(r, 0.3, 1));
+    }
+}
+
 START_TEST(first_axis_hint)
 {
     mk_rng r = {26};
@@ -579,17 +597,7 @@ START_TEST(first_axis_hint)
         mk_vec3 t = mk_v3_scale(mk_rng_dir(&r), (mk_real)mk_rng_range(&r, 0, 3));
         mk_sat_options o = mk_sat_defaults();
         mk_sat_result base, quick, hint;
-        if (box) {
-            hx[0] = mk_rng_v3(&r, 0.2, 1);
-            hx[1] = mk_rng_v3(&r, 0.2, 1);
-            mk_box_hull_init(&A, hx[0]);
-            mk_box_hull_init(&B, hx[1]);
-            a = &A.hull;
-            b = &B.hull;
-        } else {
-            a = ha = ellipsoid_hull(&r, 16, mk_rng_v3(&r, 0.3, 1));
-            b = hb = ellipsoid_hull(&r, 16, mk_rng_v3(&r, 0.3, 1));
-        }
+        random_pair(&r, box, 16, hx, &A, &B, &ha, &hb, &a, &b);
         hinted(a, b, box ? hx : NULL, &R, t, &base, &o);
         o.stop_above = 0;
         hinted(a, b, box ? hx : NULL, &R, t, &quick, &o);
@@ -640,17 +648,7 @@ START_TEST(better_face_not_held)
         mk_sat_options o = mk_sat_defaults();
         mk_sat_result base, warm;
         mk_sat_kind k;
-        if (box) {
-            hx[0] = mk_rng_v3(&r, 0.2, 1);
-            hx[1] = mk_rng_v3(&r, 0.2, 1);
-            mk_box_hull_init(&A, hx[0]);
-            mk_box_hull_init(&B, hx[1]);
-            a = &A.hull;
-            b = &B.hull;
-        } else {
-            a = ha = ellipsoid_hull(&r, 12, mk_rng_v3(&r, 0.3, 1));
-            b = hb = ellipsoid_hull(&r, 12, mk_rng_v3(&r, 0.3, 1));
-        }
+        random_pair(&r, box, 12, hx, &A, &B, &ha, &hb, &a, &b);
         hinted(a, b, box ? hx : NULL, &R, t, &base, &o);
         o.hold_face = 0;
         o.prefer_abs = (mk_real)1e9;
