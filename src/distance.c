@@ -458,23 +458,34 @@ MK_ALWAYS_INLINE void spheres(const mk_shape *a, mk_vec3 pa, const mk_shape *b, 
     put(l - a->radius - b->radius, n, mk_v3_mad(pa, a->radius, n), 0, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
-MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_mat3 *ra, mk_vec3 pa, const mk_shape *b, mk_vec3 pb, int flip,
-                                 mk_distance_result *r)
+/* box_sphere with the sphere's centre inside the box core: it leaves
+ * through the nearest face. Out of line, so that the common case keeps the
+ * rotation in registers. */
+static MK_NOINLINE void box_sphere_inside(const mk_shape *a, const mk_mat3 *ra, const mk_vec3 *pa, const mk_shape *b,
+                                          const mk_vec3 *pb, int flip, mk_distance_result *r)
 {
-    /* mk_closest_box_sphere's steps, answered in world space: the gap v and
-     * the box point q are rotated back beside the square root and the
-     * division, the long part of the chain, rather than after them. */
-    mk_vec3 h = a->u.half_extents, c = mk_mat3_tmul_v3(*ra, mk_v3_sub(pb, pa)), q = mk_box_clamp(h, c), v = mk_v3_sub(c, q);
-    mk_vec3 vw = mk_mat3_mul_v3(*ra, v), qw = mk_v3_add(mk_mat3_mul_v3(*ra, q), pa), n;
+    mk_vec3 n, q;
+    mk_real l = -mk_box_exit(a->u.half_extents, mk_mat3_tmul_v3(*ra, mk_v3_sub(*pb, *pa)), &n, &q);
+    n = mk_mat3_mul_v3(*ra, n);
+    put(l - a->radius - b->radius, n, mk_v3_mad(mk_v3_add(mk_mat3_mul_v3(*ra, q), *pa), a->radius, n), flip, 0, MK_METHOD_CLOSED_FORM,
+        MK_SOLVE_CONVERGED, r);
+}
+
+MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_mat3 *ra, const mk_vec3 *pa, const mk_shape *b, const mk_vec3 *pb,
+                                 int flip, mk_distance_result *r)
+{
+    /* mk_closest_box_sphere's steps, answered in world space. Only the gap v
+     * is rotated back: the box point is the sphere's centre less the gap
+     * (pb - R v, not R q + pa), so A's witness is pb less (l - radius) along
+     * n: one rotation fewer on the critical chain. */
+    mk_vec3 h = a->u.half_extents, c = mk_mat3_tmul_v3(*ra, mk_v3_sub(*pb, *pa)), v = mk_v3_sub(c, mk_box_clamp(h, c)), n;
     mk_real l, s = mk_inv_len(mk_v3_len2(v), &l);
-    if (l > 0) {
-        n = mk_v3_scale(vw, s);
-    } else { /* centre inside the core: leave through the nearest face */
-        l = -mk_box_exit(h, c, &n, &q);
-        n = mk_mat3_mul_v3(*ra, n);
-        qw = mk_v3_add(mk_mat3_mul_v3(*ra, q), pa);
+    if (!(l > 0)) {
+        box_sphere_inside(a, ra, pa, b, pb, flip, r);
+        return;
     }
-    put(l - a->radius - b->radius, n, mk_v3_mad(qw, a->radius, n), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+    n = mk_v3_scale(mk_mat3_mul_v3(*ra, v), s);
+    put(l - a->radius - b->radius, n, mk_v3_mad(*pb, a->radius - l, n), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
 /* ua: the capsule's axis (its z axis in world). */
@@ -550,7 +561,7 @@ static mk_status q_box_sphere(const mk_shape *a, const mk_pose *xa, const mk_sha
 {
     (void)cache;
     if (!accept(a, MK_SHAPE_BOX, xa, b, MK_SHAPE_SPHERE, xb)) return diagnose(a, xa, b, xb);
-    box_sphere(a, &xa->r, xa->p, b, xb->p, 0, r);
+    box_sphere(a, &xa->r, &xa->p, b, &xb->p, 0, r);
     return MK_OK;
 }
 
@@ -559,7 +570,7 @@ static mk_status q_sphere_box(const mk_shape *a, const mk_pose *xa, const mk_sha
 {
     (void)cache;
     if (!accept(b, MK_SHAPE_BOX, xb, a, MK_SHAPE_SPHERE, xa)) return diagnose(a, xa, b, xb);
-    box_sphere(b, &xb->r, xb->p, a, xa->p, 1, r);
+    box_sphere(b, &xb->r, &xb->p, a, &xa->p, 1, r);
     return MK_OK;
 }
 
@@ -652,7 +663,7 @@ static mk_status x_box_sphere(const mk_shape *a, const mk_transform *xa, const m
     mk_mat3 ra;
     if (!shapes_ok(a, MK_SHAPE_BOX, b, MK_SHAPE_SPHERE)) return diagnose_shapes(a, b);
     ra = mk_rotation_of(xa->q);
-    box_sphere(a, &ra, xa->p, b, xb->p, 0, r);
+    box_sphere(a, &ra, &xa->p, b, &xb->p, 0, r);
     return MK_OK;
 }
 
@@ -662,7 +673,7 @@ static mk_status x_sphere_box(const mk_shape *a, const mk_transform *xa, const m
     mk_mat3 rb;
     if (!shapes_ok(b, MK_SHAPE_BOX, a, MK_SHAPE_SPHERE)) return diagnose_shapes(a, b);
     rb = mk_rotation_of(xb->q);
-    box_sphere(b, &rb, xb->p, a, xa->p, 1, r);
+    box_sphere(b, &rb, &xb->p, a, &xa->p, 1, r);
     return MK_OK;
 }
 
