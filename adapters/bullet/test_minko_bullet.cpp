@@ -1381,6 +1381,13 @@ START_TEST(np_world_poses_follow_the_objects)
     world.addCollisionObject(&comp);
     world2.addCollisionObject(&box2);  // index 0 in world2, the ground's index in world
     world2.addCollisionObject(&ground2);
+    // A row of resting cubes: many entries, first seen in index order.
+    std::vector<btCollisionObject> row(40);
+    for (size_t k = 0; k < row.size(); k++) {
+        row[k].setCollisionShape(&cube);
+        row[k].setWorldTransform(btTransform(id, btVector3(btScalar(-15 + 0.75 * (double)k), btScalar(0.99), -5)));  // d = 0.01
+        world.addCollisionObject(&row[k]);
+    }
     const double tol = 1e3 * std::numeric_limits<btScalar>::epsilon();
     // Passes 0-2: the first world alone; pass 3: the second world, whose
     // objects take the first world's entries; pass 4: the first world again.
@@ -1394,9 +1401,11 @@ START_TEST(np_world_poses_follow_the_objects)
         const double d = pass == 1 ? 0.12 : 0.02;  // pass 1: the box moved 0.1 down since pass 0
         MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &box), -d, tol);
         MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &comp), -0.03, tol);
+        for (const btCollisionObject &o : row) MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &o), -0.01, tol);
         box.setWorldTransform(btTransform(id, btVector3(0, btScalar(pass == 0 ? 0.88 : 0.98), 0)));
     }
     ck_assert_int_eq(config.stats.collide_errors.load(), 0);
+    for (btCollisionObject &o : row) world.removeCollisionObject(&o);
     world.removeCollisionObject(&comp);
     world.removeCollisionObject(&box);
     world.removeCollisionObject(&ground);
