@@ -307,22 +307,40 @@ static void nearest_corner(const mk_pair *p, int *side, int *corner)
     }
 }
 
+/* The corners of A and B supporting n (towards B), each with its clamp into
+ * the other box, certified; *fa, *fb: corners already tried (-1: none),
+ * skipped, and on failure the corners this call tried. */
+MK_ALWAYS_INLINE int supporting_corners(const mk_pair *p, mk_vec3 n, int *fa, int *fb, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
+{
+    int ga = -1, gb = -1;
+    mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &ga);
+    mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &gb);
+    if ((gb != *fb && corner_certified(p, 0, gb, tol, d, pa, pb)) || (ga != *fa && corner_certified(p, 1, ga, tol, d, pa, pb)))
+        return 1;
+    *fa = ga;
+    *fb = gb;
+    return 0;
+}
+
+/* supporting_corners from n, then once more along the direction between the
+ * last corner and its clamp: a step of a walk over the corners, which finds
+ * the nearest corner of boxes far apart (their closest features are mostly
+ * corners). */
+static int corner_walk(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
+{
+    int fa = -1, fb = -1;
+    return supporting_corners(p, n, &fa, &fb, tol, d, pa, pb) ||
+           supporting_corners(p, mk_v3_sub(*pb, *pa), &fa, &fb, tol, d, pa, pb);
+}
+
 /* Certifies vertex-edge and vertex-vertex contacts, which no SAT axis
  * realises: the corners supporting SAT's best axis n first (usually the
  * answer), then the corner nearest the other box among all sixteen (sixteen
  * clamps, still far cheaper than GJK). */
-static int supporting_corners(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
-{
-    int fa = -1, fb = -1;
-    mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &fa);
-    mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &fb);
-    return corner_certified(p, 0, fb, tol, d, pa, pb) || corner_certified(p, 1, fa, tol, d, pa, pb);
-}
-
 static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
 {
-    int side = 0, corner = 0;
-    if (supporting_corners(p, n, tol, d, pa, pb)) return 1;
+    int side = 0, corner = 0, fa = -1, fb = -1;
+    if (supporting_corners(p, n, &fa, &fb, tol, d, pa, pb)) return 1;
     nearest_corner(p, &side, &corner);
     return corner_certified(p, side, corner, tol, d, pa, pb);
 }
@@ -385,7 +403,7 @@ static int box_box_sat(const mk_pair *p, answer *ans)
      * holds off parallel faces, which SAT's path below still tries. */
     if (d > 0 && (of_b ? face_witness_on_b(p, d, n, tol, &pa, &pb) : face_witness_on_a(p, d, n, tol, &pa, &pb))) {
         /* a corner under a face: d along n */
-    } else if (d > 0 && supporting_corners(p, n, tol, &d, &pa, &pb)) {
+    } else if (d > 0 && corner_walk(p, n, tol, &d, &pa, &pb)) {
         /* A corner and its clamp, certified along their own direction
          * (corner_certified needs no SAT bound): vertex-edge and
          * vertex-vertex pairs skip the nine edge axes. */
