@@ -356,7 +356,7 @@ MK_ALWAYS_INLINE int epa_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type 
         out->iterations = it + 1;
         if (P.nv == MK_EPA_MAX_VERTICES) break;
         w = support_from_face(p, ta, tb, climb_a, climb_b, &P, &best);
-        if (known_vertex(&P, &w) || mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol) {
+        if (mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol || known_vertex(&P, &w)) {
             /* w is the support along the answer's normal: its sep, for free */
             out->separation = -mk_v3_dot(best.n, w.w);
             out->state = MK_SOLVE_CONVERGED;
