@@ -50,6 +50,18 @@ static void add(scene *s, mk_aabb b, int is_static)
     MK_ASSERT_STATUS(mk_bp_create_proxy(s->bp, b, (void *)(intptr_t)(i + 1), ~0ull, ~0ull, is_static, &s->id[i]), MK_OK);
 }
 
+static void kill(scene *s, int i)
+{
+    MK_ASSERT_STATUS(mk_bp_destroy_proxy(s->bp, s->id[i]), MK_OK);
+    s->n--;
+    if (i == s->n) return;
+    s->box[i] = s->box[s->n]; /* the scene's indices stay dense; user pointers follow */
+    s->is_static[i] = s->is_static[s->n];
+    s->id[i] = s->id[s->n];
+    MK_ASSERT_STATUS(mk_bp_destroy_proxy(s->bp, s->id[i]), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_create_proxy(s->bp, s->box[i], (void *)(intptr_t)(i + 1), ~0ull, ~0ull, s->is_static[i], &s->id[i]), MK_OK);
+}
+
 static void move(scene *s, int i, mk_aabb b)
 {
     s->box[i] = b;
@@ -199,6 +211,33 @@ START_TEST(touching)
 }
 END_TEST
 
+/* Sweeps in a row with proxies created and destroyed between them (each
+ * sweep starts from the last one's order), a box that turns infinite
+ * across the rows and back (a plane), and one that grows taller than the
+ * rows the plan was made for. */
+START_TEST(churn)
+{
+    static scene s;
+    mk_rng r = {14};
+    const mk_real inf = (mk_real)INFINITY;
+    int i, f;
+    scene_init(&s);
+    add(&s, mk_aabb_make(mk_v3(1, 1, 1), mk_v3(3, 3, 3)), 1); /* the largest box: a plan outlives frames */
+    for (i = 1; i < 400; ++i) add(&s, random_box(&r, 20, 0.2, 1.5), i % 17 == 0);
+    for (f = 0; f < 40; ++f) {
+        for (i = 0; i < s.n; ++i)
+            if (!s.is_static[i]) move(&s, i, shifted(s.box[i], mk_v3_scale(mk_rng_dir(&r), (mk_real)0.2)));
+        for (i = 0; i < 12; ++i) kill(&s, (int)(mk_rng_unit(&r) * s.n));
+        for (i = 0; i < 12; ++i) add(&s, random_box(&r, 20, 0.2, 1.5), 0);
+        if (f % 5 == 2) move(&s, 7, mk_aabb_make(mk_v3(-inf, -inf, 3), mk_v3(inf, inf, 4)));
+        if (f % 5 == 4) move(&s, 7, s.box[8]); /* finite again, on top of another box */
+        if (f == 20) move(&s, 9, mk_aabb_make(mk_v3(4, 4, 4), mk_v3(12, 12, 12))); /* taller than the rows */
+        check_frame(&s, random_box(&r, 20, 2, 6));
+    }
+    mk_bp_destroy(s.bp);
+}
+END_TEST
+
 /* Every box the same, then every box a point at the same place: all keys
  * tie, every pair overlaps (static ones aside). */
 START_TEST(all_equal)
@@ -225,6 +264,7 @@ int main(void)
     tcase_add_test(tc, coherent);
     tcase_add_test(tc, teleporting);
     tcase_add_test(tc, touching);
+    tcase_add_test(tc, churn);
     tcase_add_test(tc, all_equal);
     suite_add_tcase(su, tc);
     return mk_test_run(su);
