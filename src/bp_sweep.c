@@ -58,6 +58,8 @@ struct mk_sweep {
     int kept;             /* f and key[0, n) may seed the next sweep (see sort_keys) */
     int age;              /* sweeps since f was planned */
     int crowded;          /* the last sweep clamped many boxes to the ends of f's ranges */
+    int sort_wait;        /* sweeps left before an insertion sort is tried again */
+    int sort_backoff;     /* the next wait, doubled each time one gives up */
 };
 
 static size_t sweep_bytes_per_proxy(void)
@@ -84,7 +86,7 @@ static mk_status sweep_create(mk_bp *bp)
     w->slot = (uint32_t *)p; p += n * sizeof(uint32_t);
     w->big = (uint32_t *)p;
     w->cap = bp->cap;
-    w->n = w->nbig = w->kept = w->age = w->crowded = 0;
+    w->n = w->nbig = w->kept = w->age = w->crowded = w->sort_wait = w->sort_backoff = 0;
     bp->sweep = w;
     return MK_OK;
 }
@@ -200,8 +202,8 @@ static void plan(const mk_bp *bp, frame_ *f)
      * double, so two rows apart must stay provably farther than any box.
      * At most MK_SWEEP_ROWS_ rows; rows beyond it merge into the last. */
     hmax *= 1.0 + 1.0 / 1024;
-    if (hmax < (yhi - ylo) / (MK_SWEEP_ROWS_ - 1)) hmax = (yhi - ylo) / (MK_SWEEP_ROWS_ - 1);
-    f->y0 = ylo <= yhi ? ylo : 0;
+    if (hmax < (yhi - ylo) / (MK_SWEEP_ROWS_ - 2)) hmax = (yhi - ylo) / (MK_SWEEP_ROWS_ - 2);
+    f->y0 = ylo <= yhi ? ylo - hmax : 0; /* row 0 is left to boxes below the range */
     f->h = hmax;
     f->inv_h = hmax > 0 ? 1.0 / hmax : 0;
     if (!(f->inv_h <= 1e300)) f->inv_h = 0; /* a subnormal height: one row */
@@ -294,13 +296,15 @@ typedef struct keying_ {
     int tall;     /* a box taller than the rows: the plan is wrong, not just slow */
 } keying_;
 
-static uint64_t key_of(const frame_ *f, const mk_aabb *b, uint32_t slot, keying_ *k)
+/* Row 0 and the last row, q = 0 and the largest q are where boxes beyond
+ * the plan's ranges land (the plan's headroom keeps the others off them). */
+static inline uint64_t key_of(const frame_ *f, const mk_aabb *b, uint32_t slot, keying_ *k)
 {
-    double ylo = lo_of(b, f->ay), xlo = lo_of(b, f->ax);
-    double ty = (ylo - f->y0) * f->inv_h, tx = (xlo - f->x0) * f->xscale;
-    k->clamped += !(ty > 0 && ty < (double)MK_SWEEP_ROWS_ && tx > 0 && tx < (double)MK_SWEEP_Q_MAX_);
+    double ylo = lo_of(b, f->ay);
+    uint32_t row = row_of(f, ylo), q = quantise(f, lo_of(b, f->ax));
+    k->clamped += (row - 1u >= MK_SWEEP_ROWS_ - 1u) | (q - 1u >= MK_SWEEP_Q_MAX_ - 1u);
     k->tall |= !((hi_of(b, f->ay) - ylo) * (1.0 + 1.0 / 1024) <= f->h);
-    return (uint64_t)row_of(f, ylo) << 40 | (uint64_t)quantise(f, xlo) << 24 | slot;
+    return (uint64_t)row << 40 | (uint64_t)q << 24 | slot;
 }
 
 /* Every box in the structure, in slot order: keys, and the big ones apart. */
@@ -369,12 +373,24 @@ static int insertion_sort(uint64_t *key, int n, long budget)
 
 /* Plans older than this are remade: the axis of largest spread may have changed. */
 #define MK_SWEEP_PLAN_AGE_ 64
+/* Longest wait between insertion sorts that gave up (boxes changing rows
+ * every frame, as in ODE's exploding heap, make the order incoherent). */
+#define MK_SWEEP_MAX_SORT_WAIT_ 32
+
+/* After an insertion sort gave up, the next ones wait (doubling waits). */
+static void insertion_gave_up(struct mk_sweep *w)
+{
+    w->sort_backoff = w->sort_backoff ? 2 * w->sort_backoff : 1;
+    if (w->sort_backoff > MK_SWEEP_MAX_SORT_WAIT_) w->sort_backoff = MK_SWEEP_MAX_SORT_WAIT_;
+    w->sort_wait = w->sort_backoff;
+}
 
 /* Sorted keys of the boxes that fit a row, the big ones listed apart, and
  * the per-box arrays the sweep reads. A stateless sweep right after
  * another one (`reuse`) keeps its plan, unless it is old or boxes crowded
  * the ends of its ranges, and starts from its order: an insertion sort,
- * O(n) on a coherent scene, with a radix sort past 4 moves per box. Any
+ * O(n) on a coherent scene, with a radix sort past 4 moves per box (and
+ * for a while after one gave up). Any
  * plan is correct as long as no box is taller than its rows; one that
  * meets such a box is remade. */
 static int sort_keys(mk_bp *bp, int reuse, int *nbig)
@@ -382,21 +398,23 @@ static int sort_keys(mk_bp *bp, int reuse, int *nbig)
     struct mk_sweep *w = bp->sweep;
     frame_ *f = &w->f;
     keying_ k = {0, 0};
-    int n = 0, i, sorted = 0;
-    reuse = reuse && w->kept && !w->crowded && w->age < MK_SWEEP_PLAN_AGE_;
-    if (reuse) {
+    int n = 0, i, sorted = 0, keep = reuse && w->kept && !w->crowded && w->age < MK_SWEEP_PLAN_AGE_;
+    if (keep && w->sort_wait == 0) {
         n = keys_in_last_order(bp, f, nbig, &k);
-        if (k.tall) reuse = 0;
-        else sorted = insertion_sort(w->key, n, 4L * n + 64);
-        w->age++;
+        if (!k.tall && !(sorted = insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
+        if (sorted) w->sort_backoff = 0;
+    } else if (keep) { /* the plan without the order: keys in slot order, sequential reads */
+        w->sort_wait--;
+        n = keys_by_slot(bp, f, nbig, &k);
     }
-    if (!reuse) {
+    if (!keep || k.tall) {
         plan(bp, f);
         k.clamped = 0;
         k.tall = 0;
         n = keys_by_slot(bp, f, nbig, &k);
         w->age = 0;
     }
+    w->age++;
     if (!sorted) mk_sort_u64_by_(w->key, w->tmp, n, 3); /* the slot is payload: input order breaks ties */
     w->crowded = k.clamped > n / 16 + 16;
     for (i = 0; i < n; ++i) {
