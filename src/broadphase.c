@@ -408,15 +408,16 @@ static int sweep_is_cheap(mk_bp *bp)
  * The weights are fitted so that the estimate ranks the two as measured:
  * bench_broadphase with events at 10k (uniform, mixed, churn: the grid
  * 1.6-2.8x faster, estimate 3-5x) and Bullet's 3000 falling boxes (SAP
- * 2.9x fewer instructions in mk_bp_update over 300 steps; estimate 1.2-3x,
- * until the pile spreads and SAP's swaps run over budget, estimate < 0.5). */
+ * 2.9x fewer instructions in mk_bp_update over 300 steps; estimate 1-6x
+ * cheaper, until the pile spreads and SAP's swaps run over budget). Costs
+ * 32 movers x at most 2048 proxies, a few million instructions, per choice. */
 #define MK_BP_COST_MOVERS_ 32
-#define MK_BP_COST_AGAINST_ 4096
-#define MK_BP_COST_MARGIN_ 1.5
+#define MK_BP_COST_AGAINST_ 2048
+#define MK_BP_COST_MARGIN_ 2.0
 #define MK_BP_COST_SWAP_ 25.0
 #define MK_BP_COST_CANDIDATE_ 12.0
 #define MK_BP_COST_RETEST_ 100.0
-typedef struct move_cost_ { double swaps, near, woken; } move_cost_;
+typedef struct move_cost_ { long swaps[2], near[2], woken[2]; } move_cost_; /* [the other one moved] */
 
 /* Endpoint pairs of the mover (old o, new n) and b (old bo, new bn) on one
  * axis whose order flips: each is one swap of SAP's insertion sort. */
@@ -426,24 +427,25 @@ static int flips(mk_real o, mk_real n, mk_real bo, mk_real bn)
 }
 
 static void cost_against(const mk_aabb *o, const mk_aabb *n, mk_real travel, const mk_aabb *bo, const mk_aabb *bn,
-                         double share, move_cost_ *c)
+                         int moved, move_cost_ *c)
 {
     const mk_real *ol = &o->lo.x, *oh = &o->hi.x, *nl = &n->lo.x, *nh = &n->hi.x;
     const mk_real *bl = &bo->lo.x, *bh = &bo->hi.x, *bnl = &bn->lo.x, *bnh = &bn->hi.x;
     mk_real gap = -MK_REAL_MAX, depth = MK_REAL_MAX;
-    int k, near = 1, swaps = 0;
+    int k, near = 1;
     for (k = 0; k < 3; ++k) {
         mk_real d = bl[k] - oh[k] > ol[k] - bh[k] ? bl[k] - oh[k] : ol[k] - bh[k];
-        mk_real size = oh[k] - ol[k] > bh[k] - bl[k] ? oh[k] - ol[k] : bh[k] - bl[k];
-        swaps += flips(ol[k], nl[k], bl[k], bnl[k]) + flips(ol[k], nl[k], bh[k], bnh[k]) +
-                 flips(oh[k], nh[k], bl[k], bnl[k]) + flips(oh[k], nh[k], bh[k], bnh[k]);
-        near &= d < size;
+        /* no endpoint order can flip on an axis where the two boxes' spans
+         * before and after the move do not meet (most proxies, most axes) */
+        if (mk_min(bl[k], bnl[k]) <= mk_max(oh[k], nh[k]) && mk_min(ol[k], nl[k]) <= mk_max(bh[k], bnh[k]))
+            c->swaps[moved] += flips(ol[k], nl[k], bl[k], bnl[k]) + flips(ol[k], nl[k], bh[k], bnh[k]) +
+                               flips(oh[k], nh[k], bl[k], bnl[k]) + flips(oh[k], nh[k], bh[k], bnh[k]);
+        near &= d < mk_max(oh[k] - ol[k], bh[k] - bl[k]);
         if (d > gap) gap = d;
         if (-d < depth) depth = -d;
     }
-    c->swaps += share * swaps;
-    c->near += share * near;
-    c->woken += share * (near && (gap > 0 ? gap : depth) <= 2 * travel);
+    c->near[moved] += near;
+    c->woken[moved] += near && (gap > 0 ? gap : depth) <= 2 * travel;
 }
 
 static int is_mover(const mk_bp *bp, uint32_t s)
@@ -455,13 +457,13 @@ static int is_mover(const mk_bp *bp, uint32_t s)
  * proxy), so their ratio needs no scaling. */
 static int sap_is_cheaper(const mk_bp *bp)
 {
-    move_cost_ c = {0, 0, 0};
+    move_cost_ c = {{0, 0}, {0, 0}, {0, 0}};
     double sap, grid;
     int i, t = 0, movers = 0, sampled = 0, stride, jstride;
     for (i = 0; i < bp->dirty_count; ++i) movers += is_mover(bp, bp->dirty[i]);
     if (movers == 0) return bp->kind == MK_BP_SAP; /* nothing to weigh: stay */
     stride = movers > MK_BP_COST_MOVERS_ ? movers / MK_BP_COST_MOVERS_ : 1;
-    jstride = bp->hi_slot > MK_BP_COST_AGAINST_ ? bp->hi_slot / MK_BP_COST_AGAINST_ : 1;
+    jstride = (bp->hi_slot + MK_BP_COST_AGAINST_ - 1) / MK_BP_COST_AGAINST_;
     for (i = 0; i < bp->dirty_count && sampled < MK_BP_COST_MOVERS_; ++i) {
         uint32_t m = bp->dirty[i], s;
         const mk_aabb *o = &bp->box[m], *n = &bp->next[m];
@@ -470,12 +472,12 @@ static int sap_is_cheaper(const mk_bp *bp)
         travel = mk_max(mk_v3_max_abs(mk_v3_sub(n->lo, o->lo)), mk_v3_max_abs(mk_v3_sub(n->hi, o->hi)));
         for (s = (uint32_t)(sampled % jstride); s < (uint32_t)bp->hi_slot; s += (uint32_t)jstride)
             if (s != m && (bp->flags[s] & (MK_PF_ALIVE | MK_PF_NEW | MK_PF_DYING)) == MK_PF_ALIVE)
-                /* a pair of movers is met from both sides: half each */
-                cost_against(o, n, travel, &bp->box[s], &bp->next[s], bp->flags[s] & MK_PF_MOVED ? 0.5 : 1.0, &c);
+                cost_against(o, n, travel, &bp->box[s], &bp->next[s], (bp->flags[s] & MK_PF_MOVED) != 0, &c);
         ++sampled;
     }
-    sap = MK_BP_COST_SWAP_ * c.swaps;
-    grid = MK_BP_COST_CANDIDATE_ * c.near + MK_BP_COST_RETEST_ * c.woken;
+    /* a pair of movers is met from both sides: half each */
+    sap = MK_BP_COST_SWAP_ * (c.swaps[0] + 0.5 * c.swaps[1]);
+    grid = MK_BP_COST_CANDIDATE_ * (c.near[0] + 0.5 * c.near[1]) + MK_BP_COST_RETEST_ * (c.woken[0] + 0.5 * c.woken[1]);
     /* a switch costs a rebuild, and the sample is noisy: the other must win clearly */
     return bp->kind == MK_BP_SAP ? sap <= MK_BP_COST_MARGIN_ * grid : MK_BP_COST_MARGIN_ * sap < grid;
 }
