@@ -1064,7 +1064,8 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
     pair_sink sink = {NULL, 0, 0};
     pair *got[NSPACE_ONLY] = {NULL, NULL, NULL};
     size_t gotcap[NSPACE_ONLY] = {0, 0, 0}, ngot[NSPACE_ONLY];
-    double *best[NSPACE_ONLY], med[NSPACE_ONLY], mean[NSPACE_ONLY], fastest_ode;
+    double *best[NSPACE_ONLY], med[NSPACE_ONLY], mean[NSPACE_ONLY], worst[NSPACE_ONLY], fastest_ode;
+    int worst_at[NSPACE_ONLY];
     long long npairs[NSPACE_ONLY] = {0, 0, 0}, missing[NSPACE_ONLY] = {0, 0, 0}, extra[NSPACE_ONLY] = {0, 0, 0};
     int f, b, rep;
     if (!poses_path || !load_frames(poses_path, sc, &rec)) {
@@ -1109,31 +1110,37 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
     }
     for (b = 0; b < NSPACE_ONLY; b++) {
         mean[b] = 0;
-        for (f = from; f < to; f++) mean[b] += best[b][f] / (to - from);
+        worst[b] = -1;
+        worst_at[b] = from;
+        for (f = from; f < to; f++) {
+            mean[b] += best[b][f] / (to - from);
+            if (best[b][f] > worst[b]) { worst[b] = best[b][f]; worst_at[b] = f; }
+        }
         med[b] = median(best[b] + from, to - from);
     }
     fastest_ode = fmin(med[0], med[1]);
     printf("\nstress_space %s: frames %d..%d of the stress heap (%d bodies) replayed through each space; space collide alone,\n"
-           "the same pair-storing callback for all; per frame the best of %d replays (ms: median and mean over frames;\n"
-           "pair differences with Minko's set summed over frames)\n",
+           "the same pair-storing callback for all; per frame the best of %d replays (ms: median, mean and max over\n"
+           "frames, with the frame of the max; pair differences with Minko's set summed over frames)\n",
            sc->variant, from, to - 1, rec.nbodies, reps);
-    printf("  %-10s %9s %9s %10s %14s %14s %10s\n", "backend", "median", "mean", "pairs", "not_in_minko", "only_minko",
-           "vs_fastest");
+    printf("  %-10s %9s %9s %9s %5s %10s %14s %14s %10s\n", "backend", "median", "mean", "max", "at", "pairs", "not_in_minko",
+           "only_minko", "vs_fastest");
     for (b = 0; b < NSPACE_ONLY; b++) {
         double ratio = med[b] / fastest_ode;
         const char *name = SPACE_ONLY[b].be.name;
         if (b == SPACE_ONLY_MINKO)
-            printf("  %-10s %9.3f %9.3f %10.1f %14s %14s %10.2f\n", name, med[b], mean[b], (double)npairs[b] / (to - from),
-                   "-", "-", ratio);
+            printf("  %-10s %9.3f %9.3f %9.3f %5d %10.1f %14s %14s %10.2f\n", name, med[b], mean[b], worst[b], worst_at[b],
+                   (double)npairs[b] / (to - from), "-", "-", ratio);
         else
-            printf("  %-10s %9.3f %9.3f %10.1f %14lld %14lld %10.2f\n", name, med[b], mean[b], (double)npairs[b] / (to - from),
-                   missing[b], extra[b], ratio);
+            printf("  %-10s %9.3f %9.3f %9.3f %5d %10.1f %14lld %14lld %10.2f\n", name, med[b], mean[b], worst[b], worst_at[b],
+                   (double)npairs[b] / (to - from), missing[b], extra[b], ratio);
         if (!json) continue;
         fprintf(json,
                 "{\"suite\":\"ode\",\"case\":\"stress_space\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":%d,\"bodies\":%d,"
-                "\"first_frame\":%d,\"reps\":%d,\"space_ms_per_frame\":%.6g,\"space_ms_mean\":%.6g,\"pairs_per_frame\":%.6g,"
-                "\"ratio_to_fastest_ode\":%.6g",
-                sc->variant, name, to - from, rec.nbodies, from, reps, med[b], mean[b], (double)npairs[b] / (to - from), ratio);
+                "\"first_frame\":%d,\"reps\":%d,\"space_ms_per_frame\":%.6g,\"space_ms_mean\":%.6g,\"space_ms_max\":%.6g,\"max_at_frame\":%d,"
+                "\"pairs_per_frame\":%.6g,\"ratio_to_fastest_ode\":%.6g",
+                sc->variant, name, to - from, rec.nbodies, from, reps, med[b], mean[b], worst[b], worst_at[b],
+                (double)npairs[b] / (to - from), ratio);
         if (b != SPACE_ONLY_MINKO)
             fprintf(json, ",\"pairs_not_in_minko\":%lld,\"pairs_only_in_minko\":%lld", missing[b], extra[b]);
         fprintf(json, "}\n");

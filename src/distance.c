@@ -21,20 +21,32 @@ const char *mk_method_name(mk_method m)
  * the two accept exactly the same input (tests/test_distance.c,
  * quick_test_matches_diagnosis), so it never returns MK_OK to a method that
  * would then skip its answer. */
+static MK_NOINLINE mk_status diagnose_shapes(const mk_shape *a, const mk_shape *b)
+{
+    mk_status st = mk_shape_validate(a);
+    return st != MK_OK ? st : mk_shape_validate(b);
+}
+
 static MK_NOINLINE mk_status diagnose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb)
 {
     mk_status st;
-    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
+    if ((st = diagnose_shapes(a, b)) != MK_OK) return st;
     return mk_pose_ok_(xa) && mk_pose_ok_(xb) ? MK_OK : MK_ERR_UNCHECKED_POSE;
 }
 
-/* The quick test every query pays, for two shapes of types ta, tb: no call
- * and, when ta and tb are constants, no switch. The poses were checked when
- * they were made; here only their tags are read. */
+/* The quick test of two shapes of types ta, tb: no call and, when ta and tb
+ * are constants, no switch. */
+MK_ALWAYS_INLINE int shapes_ok(const mk_shape *a, mk_shape_type ta, const mk_shape *b, mk_shape_type tb)
+{
+    return mk_shape_ok_typed_(a, ta) && mk_shape_ok_typed_(b, tb);
+}
+
+/* The quick test every pose query pays. The poses were checked when they
+ * were made; here only their tags are read. */
 MK_ALWAYS_INLINE int accept(const mk_shape *a, mk_shape_type ta, const mk_pose *xa, const mk_shape *b, mk_shape_type tb,
                             const mk_pose *xb)
 {
-    return mk_shape_ok_typed_(a, ta) && mk_shape_ok_typed_(b, tb) && mk_pose_ok_(xa) && mk_pose_ok_(xb);
+    return shapes_ok(a, ta, b, tb) && mk_pose_ok_(xa) && mk_pose_ok_(xb);
 }
 
 /* Validation of two non-NULL shapes of any type and their poses. */
@@ -46,25 +58,15 @@ static mk_status check(const mk_shape *a, const mk_pose *xa, const mk_shape *b, 
                : diagnose(a, xa, b, xb);
 }
 
-/* The mk_transform entry points: both transforms checked (in argument
- * order after the shapes, as the contract names errors) and converted to
- * poses for the one implementation of each query. */
+/* The mk_transform entry points accept what mk_transform_ok_ accepts; on
+ * anything else this names the error (shapes first, then the transforms in
+ * argument order, as the contract does). */
 static MK_NOINLINE mk_status diagnose_transforms(const mk_shape *a, const mk_transform *xa, const mk_shape *b,
                                                  const mk_transform *xb)
 {
     mk_status st;
-    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
-    if ((st = mk_transform_check_(*xa)) != MK_OK) return st;
+    if ((st = diagnose_shapes(a, b)) != MK_OK || (st = mk_transform_check_(*xa)) != MK_OK) return st;
     return mk_transform_check_(*xb);
-}
-
-MK_ALWAYS_INLINE mk_status poses_of(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb, mk_pose *pa,
-                                    mk_pose *pb)
-{
-    if (!mk_transform_ok_(xa) || !mk_transform_ok_(xb)) return diagnose_transforms(a, xa, b, xb);
-    mk_pose_set_(pa, xa);
-    mk_pose_set_(pb, xb);
-    return MK_OK;
 }
 
 /* ---- the iterative path ----------------------------------------------------- */
@@ -444,52 +446,61 @@ MK_ALWAYS_INLINE void put_aligned(mk_hit h, mk_vec3 pa, int flip, mk_distance_re
     put(h.distance, h.normal, mk_v3_add(h.a, pa), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
-/* The closed forms read only the parts of the poses their pair uses: the
- * centres, a capsule's axis, a box's rotation. */
-MK_ALWAYS_INLINE void spheres(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
-                              mk_distance_result *r)
+/* The closed forms take only the parts of the poses their pair uses (the
+ * centres, a capsule's axis, a box's rotation), so that the mk_transform
+ * entry converts no more of a quaternion than that (transform_methods). */
+MK_ALWAYS_INLINE void spheres(const mk_shape *a, mk_vec3 pa, const mk_shape *b, mk_vec3 pb, mk_distance_result *r)
 {
     mk_real l;
-    mk_vec3 n = mk_unit_len(mk_v3_sub(xb->p, xa->p), &l);
+    mk_vec3 n = mk_unit_len(mk_v3_sub(pb, pa), &l);
     /* Concentric spheres: every direction is a shortest way out; take +z. */
     if (!(l > 0)) n = mk_v3(0, 0, 1);
-    put(l - a->radius - b->radius, n, mk_v3_mad(xa->p, a->radius, n), 0, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+    put(l - a->radius - b->radius, n, mk_v3_mad(pa, a->radius, n), 0, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
-MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, int flip,
-                                 mk_distance_result *r)
+/* box_sphere with the sphere's centre inside the box core: it leaves
+ * through the nearest face. Out of line, so that the common case keeps the
+ * rotation in registers. */
+static MK_NOINLINE void box_sphere_inside(const mk_shape *a, const mk_mat3 *ra, const mk_vec3 *pa, const mk_shape *b,
+                                          const mk_vec3 *pb, int flip, mk_distance_result *r)
 {
-    /* mk_closest_box_sphere's steps, answered in world space: the gap v and
-     * the box point q are rotated back beside the square root and the
-     * division, the long part of the chain, rather than after them. */
-    const mk_mat3 *ra = &xa->r;
-    mk_vec3 h = a->u.half_extents, c = mk_mat3_tmul_v3(*ra, mk_v3_sub(xb->p, xa->p)), q = mk_box_clamp(h, c), v = mk_v3_sub(c, q);
-    mk_vec3 vw = mk_mat3_mul_v3(*ra, v), qw = mk_v3_add(mk_mat3_mul_v3(*ra, q), xa->p), n;
+    mk_vec3 n, q;
+    mk_real l = -mk_box_exit(a->u.half_extents, mk_mat3_tmul_v3(*ra, mk_v3_sub(*pb, *pa)), &n, &q);
+    n = mk_mat3_mul_v3(*ra, n);
+    put(l - a->radius - b->radius, n, mk_v3_mad(mk_v3_add(mk_mat3_mul_v3(*ra, q), *pa), a->radius, n), flip, 0, MK_METHOD_CLOSED_FORM,
+        MK_SOLVE_CONVERGED, r);
+}
+
+MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_mat3 *ra, const mk_vec3 *pa, const mk_shape *b, const mk_vec3 *pb,
+                                 int flip, mk_distance_result *r)
+{
+    /* mk_closest_box_sphere's steps, answered in world space. Only the gap v
+     * is rotated back: the box point is the sphere's centre less the gap
+     * (pb - R v, not R q + pa), so A's witness is pb less (l - radius) along
+     * n: one rotation fewer on the critical chain. */
+    mk_vec3 h = a->u.half_extents, c = mk_mat3_tmul_v3(*ra, mk_v3_sub(*pb, *pa)), v = mk_v3_sub(c, mk_box_clamp(h, c)), n;
     mk_real l, s = mk_inv_len(mk_v3_len2(v), &l);
-    if (l > 0) {
-        n = mk_v3_scale(vw, s);
-    } else { /* centre inside the core: leave through the nearest face */
-        l = -mk_box_exit(h, c, &n, &q);
-        n = mk_mat3_mul_v3(*ra, n);
-        qw = mk_v3_add(mk_mat3_mul_v3(*ra, q), xa->p);
+    if (!(l > 0)) {
+        box_sphere_inside(a, ra, pa, b, pb, flip, r);
+        return;
     }
-    put(l - a->radius - b->radius, n, mk_v3_mad(qw, a->radius, n), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+    n = mk_v3_scale(mk_mat3_mul_v3(*ra, v), s);
+    put(l - a->radius - b->radius, n, mk_v3_mad(*pb, a->radius - l, n), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
-MK_ALWAYS_INLINE void capsule_sphere(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
-                                     int flip, mk_distance_result *r)
+/* ua: the capsule's axis (its z axis in world). */
+MK_ALWAYS_INLINE void capsule_sphere(const mk_shape *a, mk_vec3 ua, mk_vec3 pa, const mk_shape *b, mk_vec3 pb, int flip,
+                                     mk_distance_result *r)
 {
-    put_aligned(mk_closest_capsule_sphere(a->u.capsule.half_height, xa->r.c2, a->radius, mk_v3_sub(xb->p, xa->p),
-                                          b->radius),
-                xa->p, flip, r);
+    put_aligned(mk_closest_capsule_sphere(a->u.capsule.half_height, ua, a->radius, mk_v3_sub(pb, pa), b->radius), pa, flip, r);
 }
 
-MK_ALWAYS_INLINE void capsules(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
+MK_ALWAYS_INLINE void capsules(const mk_shape *a, mk_vec3 ua, mk_vec3 pa, const mk_shape *b, mk_vec3 ub, mk_vec3 pb,
                                mk_distance_result *r)
 {
-    put_aligned(mk_closest_capsule_capsule(a->u.capsule.half_height, xa->r.c2, a->radius, mk_v3_sub(xb->p, xa->p),
-                                           xb->r.c2, b->u.capsule.half_height, b->radius),
-                xa->p, 0, r);
+    put_aligned(mk_closest_capsule_capsule(a->u.capsule.half_height, ua, a->radius, mk_v3_sub(pb, pa), ub,
+                                           b->u.capsule.half_height, b->radius),
+                pa, 0, r);
 }
 
 /* The methods that run in A's frame with B's whole relative pose. */
@@ -541,7 +552,7 @@ static mk_status q_spheres(const mk_shape *a, const mk_pose *xa, const mk_shape 
 {
     (void)cache;
     if (!accept(a, MK_SHAPE_SPHERE, xa, b, MK_SHAPE_SPHERE, xb)) return diagnose(a, xa, b, xb);
-    spheres(a, xa, b, xb, r);
+    spheres(a, xa->p, b, xb->p, r);
     return MK_OK;
 }
 
@@ -550,7 +561,7 @@ static mk_status q_box_sphere(const mk_shape *a, const mk_pose *xa, const mk_sha
 {
     (void)cache;
     if (!accept(a, MK_SHAPE_BOX, xa, b, MK_SHAPE_SPHERE, xb)) return diagnose(a, xa, b, xb);
-    box_sphere(a, xa, b, xb, 0, r);
+    box_sphere(a, &xa->r, &xa->p, b, &xb->p, 0, r);
     return MK_OK;
 }
 
@@ -559,7 +570,7 @@ static mk_status q_sphere_box(const mk_shape *a, const mk_pose *xa, const mk_sha
 {
     (void)cache;
     if (!accept(b, MK_SHAPE_BOX, xb, a, MK_SHAPE_SPHERE, xa)) return diagnose(a, xa, b, xb);
-    box_sphere(b, xb, a, xa, 1, r);
+    box_sphere(b, &xb->r, &xb->p, a, &xa->p, 1, r);
     return MK_OK;
 }
 
@@ -568,7 +579,7 @@ static mk_status q_capsule_sphere(const mk_shape *a, const mk_pose *xa, const mk
 {
     (void)cache;
     if (!accept(a, MK_SHAPE_CAPSULE, xa, b, MK_SHAPE_SPHERE, xb)) return diagnose(a, xa, b, xb);
-    capsule_sphere(a, xa, b, xb, 0, r);
+    capsule_sphere(a, xa->r.c2, xa->p, b, xb->p, 0, r);
     return MK_OK;
 }
 
@@ -577,7 +588,7 @@ static mk_status q_sphere_capsule(const mk_shape *a, const mk_pose *xa, const mk
 {
     (void)cache;
     if (!accept(b, MK_SHAPE_CAPSULE, xb, a, MK_SHAPE_SPHERE, xa)) return diagnose(a, xa, b, xb);
-    capsule_sphere(b, xb, a, xa, 1, r);
+    capsule_sphere(b, xb->r.c2, xb->p, a, xa->p, 1, r);
     return MK_OK;
 }
 
@@ -586,7 +597,7 @@ static mk_status q_capsules(const mk_shape *a, const mk_pose *xa, const mk_shape
 {
     (void)cache;
     if (!accept(a, MK_SHAPE_CAPSULE, xa, b, MK_SHAPE_CAPSULE, xb)) return diagnose(a, xa, b, xb);
-    capsules(a, xa, b, xb, r);
+    capsules(a, xa->r.c2, xa->p, b, xb->r.c2, xb->p, r);
     return MK_OK;
 }
 
@@ -628,52 +639,145 @@ static mk_status q_unsupported(const mk_shape *a, const mk_pose *xa, const mk_sh
     return st != MK_OK ? st : MK_ERR_UNSUPPORTED;
 }
 
-static const pair_fn methods[MK_SHAPE_TYPE_COUNT][MK_SHAPE_TYPE_COUNT] = {
-    /*            sphere             box            capsule            cylinder       cone           hull           plane */
-    /* sphere */ {q_spheres,         q_sphere_box,  q_sphere_capsule,  q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
-    /* box    */ {q_box_sphere,      q_box_box,     q_gjk,             q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
-    /* capsule*/ {q_capsule_sphere,  q_gjk,         q_capsules,        q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
-    /* cyl.   */ {q_gjk,             q_gjk,         q_gjk,             q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
-    /* cone   */ {q_gjk,             q_gjk,         q_gjk,             q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
-    /* hull   */ {q_gjk,             q_gjk,         q_gjk,             q_gjk,         q_gjk,         q_gjk,         q_shape_plane},
-    /* plane  */ {q_plane_shape,     q_plane_shape, q_plane_shape,     q_plane_shape, q_plane_shape, q_plane_shape, q_unsupported},
-};
+/* The closed forms again for the mk_transform entry, on two transforms that
+ * passed mk_transform_ok_: each converts only what its pair reads, so a
+ * sphere's quaternion is checked (a non-unit one is still
+ * MK_ERR_BAD_ROTATION: the contract does not depend on the shape) but never
+ * turned into a matrix, a box's becomes its matrix and a capsule's only its
+ * axis. They compute what the pose methods compute from the same bits
+ * (tests/test_distance.c, pose_path_matches_transform_path). */
+typedef mk_status (*transform_fn)(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                                  mk_distance_result *r);
 
-static pair_fn method_of(const mk_shape *a, const mk_shape *b)
+static mk_status x_spheres(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                           mk_distance_result *r)
 {
+    if (!shapes_ok(a, MK_SHAPE_SPHERE, b, MK_SHAPE_SPHERE)) return diagnose_shapes(a, b);
+    spheres(a, xa->p, b, xb->p, r);
+    return MK_OK;
+}
+
+static mk_status x_box_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                              mk_distance_result *r)
+{
+    mk_mat3 ra;
+    if (!shapes_ok(a, MK_SHAPE_BOX, b, MK_SHAPE_SPHERE)) return diagnose_shapes(a, b);
+    ra = mk_rotation_of(xa->q);
+    box_sphere(a, &ra, &xa->p, b, &xb->p, 0, r);
+    return MK_OK;
+}
+
+static mk_status x_sphere_box(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                              mk_distance_result *r)
+{
+    mk_mat3 rb;
+    if (!shapes_ok(b, MK_SHAPE_BOX, a, MK_SHAPE_SPHERE)) return diagnose_shapes(a, b);
+    rb = mk_rotation_of(xb->q);
+    box_sphere(b, &rb, &xb->p, a, &xa->p, 1, r);
+    return MK_OK;
+}
+
+static mk_status x_capsule_sphere(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                                  mk_distance_result *r)
+{
+    if (!shapes_ok(a, MK_SHAPE_CAPSULE, b, MK_SHAPE_SPHERE)) return diagnose_shapes(a, b);
+    capsule_sphere(a, mk_rotation_z_of(xa->q), xa->p, b, xb->p, 0, r);
+    return MK_OK;
+}
+
+static mk_status x_sphere_capsule(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                                  mk_distance_result *r)
+{
+    if (!shapes_ok(b, MK_SHAPE_CAPSULE, a, MK_SHAPE_SPHERE)) return diagnose_shapes(a, b);
+    capsule_sphere(b, mk_rotation_z_of(xb->q), xb->p, a, xa->p, 1, r);
+    return MK_OK;
+}
+
+static mk_status x_capsules(const mk_shape *a, const mk_transform *xa, const mk_shape *b, const mk_transform *xb,
+                            mk_distance_result *r)
+{
+    if (!shapes_ok(a, MK_SHAPE_CAPSULE, b, MK_SHAPE_CAPSULE)) return diagnose_shapes(a, b);
+    capsules(a, mk_rotation_z_of(xa->q), xa->p, b, mk_rotation_z_of(xb->q), xb->p, r);
+    return MK_OK;
+}
+
+/* A pair's method for each entry: `transform` is NULL where the pair needs
+ * both whole rotations, and the mk_transform entry then converts both. */
+typedef struct pair_methods {
+    pair_fn pose;
+    transform_fn transform;
+} pair_methods;
+
+#define GJK_ {q_gjk, NULL}
+#define S_PL {q_shape_plane, NULL}
+#define PL_S {q_plane_shape, NULL}
+static const pair_methods methods[MK_SHAPE_TYPE_COUNT][MK_SHAPE_TYPE_COUNT] = {
+    /* sphere */ {{q_spheres, x_spheres}, {q_sphere_box, x_sphere_box}, {q_sphere_capsule, x_sphere_capsule}, GJK_, GJK_, GJK_, S_PL},
+    /* box    */ {{q_box_sphere, x_box_sphere}, {q_box_box, NULL}, GJK_, GJK_, GJK_, GJK_, S_PL},
+    /* capsule*/ {{q_capsule_sphere, x_capsule_sphere}, GJK_, {q_capsules, x_capsules}, GJK_, GJK_, GJK_, S_PL},
+    /* cyl.   */ {GJK_, GJK_, GJK_, GJK_, GJK_, GJK_, S_PL},
+    /* cone   */ {GJK_, GJK_, GJK_, GJK_, GJK_, GJK_, S_PL},
+    /* hull   */ {GJK_, GJK_, GJK_, GJK_, GJK_, GJK_, S_PL},
+    /* plane  */ {PL_S, PL_S, PL_S, PL_S, PL_S, PL_S, {q_unsupported, NULL}},
+};
+#undef GJK_
+#undef S_PL
+#undef PL_S
+
+static const pair_methods *method_of(const mk_shape *a, const mk_shape *b)
+{
+    static const pair_methods unknown = {q_unsupported, NULL};
     unsigned ta = (unsigned)a->type, tb = (unsigned)b->type;
-    return ta < MK_SHAPE_TYPE_COUNT && tb < MK_SHAPE_TYPE_COUNT ? methods[ta][tb] : q_unsupported;
+    return ta < MK_SHAPE_TYPE_COUNT && tb < MK_SHAPE_TYPE_COUNT ? &methods[ta][tb] : &unknown;
 }
 
 mk_status mk_distance_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_gjk_cache *cache,
                            mk_distance_result *out)
 {
     if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
-    return method_of(a, b)(a, xa, b, xb, cache, out);
+    return method_of(a, b)->pose(a, xa, b, xb, cache, out);
+}
+
+/* The pose method m of a pair that reads both whole rotations, from two
+ * accepted transforms. Out of line: its conversions would otherwise share
+ * registers with the transform checks of every closed form. */
+static MK_NOINLINE mk_status distance_posed(pair_fn m, const mk_shape *a, const mk_transform *xa, const mk_shape *b,
+                                            const mk_transform *xb, mk_gjk_cache *cache, mk_distance_result *out)
+{
+    mk_pose pa, pb;
+    mk_pose_set_(&pa, xa);
+    mk_pose_set_(&pb, xb);
+    return m(a, &pa, b, &pb, cache, out);
 }
 
 mk_status mk_distance(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
                       mk_distance_result *out)
 {
-    mk_pose pa, pb;
-    mk_status st;
+    const pair_methods *m;
     if (!a || !b || !out) return MK_ERR_NULL;
-    if ((st = poses_of(a, &xa, b, &xb, &pa, &pb)) != MK_OK) return st;
-    return method_of(a, b)(a, &pa, b, &pb, cache, out);
+    if (!mk_transform_ok_(&xa) || !mk_transform_ok_(&xb)) return diagnose_transforms(a, &xa, b, &xb);
+    m = method_of(a, b);
+    if (m->transform) return m->transform(a, &xa, b, &xb, out);
+    return distance_posed(m->pose, a, &xa, b, &xb, cache, out);
+}
+
+/* Two spheres' boolean: no square root. */
+MK_ALWAYS_INLINE int spheres_touch(const mk_shape *a, mk_vec3 pa, const mk_shape *b, mk_vec3 pb)
+{
+    mk_real s = a->radius + b->radius;
+    return mk_v3_len2(mk_v3_sub(pb, pa)) <= s * s;
 }
 
 /* The boolean query for checked poses (shapes and poses not NULL). */
 static mk_status overlap(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_gjk_cache *cache,
                          int *overlapping)
 {
-    pair_fn m = method_of(a, b);
+    pair_fn m = method_of(a, b)->pose;
     mk_distance_result r;
     mk_status st;
-    if (m == q_spheres) { /* no square root */
-        mk_vec3 d = mk_v3_sub(xb->p, xa->p);
-        mk_real s = a->radius + b->radius;
-        if ((st = check(a, xa, b, xb)) != MK_OK) return st;
-        *overlapping = mk_v3_len2(d) <= s * s;
+    if (m == q_spheres) {
+        if (!accept(a, MK_SHAPE_SPHERE, xa, b, MK_SHAPE_SPHERE, xb)) return diagnose(a, xa, b, xb);
+        *overlapping = spheres_touch(a, xa->p, b, xb->p);
         return MK_OK;
     }
 #ifndef MK_WITHOUT_GJK
@@ -703,10 +807,25 @@ mk_status mk_overlap_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *
 mk_status mk_overlap(const mk_shape *a, mk_transform xa, const mk_shape *b, mk_transform xb, mk_gjk_cache *cache,
                      int *overlapping)
 {
+    const pair_methods *m;
+    mk_distance_result r;
     mk_pose pa, pb;
     mk_status st;
     if (!a || !b || !overlapping) return MK_ERR_NULL;
-    if ((st = poses_of(a, &xa, b, &xb, &pa, &pb)) != MK_OK) return st;
+    if (!mk_transform_ok_(&xa) || !mk_transform_ok_(&xb)) return diagnose_transforms(a, &xa, b, &xb);
+    m = method_of(a, b);
+    if (m->pose == q_spheres) {
+        if (!shapes_ok(a, MK_SHAPE_SPHERE, b, MK_SHAPE_SPHERE)) return diagnose_shapes(a, b);
+        *overlapping = spheres_touch(a, xa.p, b, xb.p);
+        return MK_OK;
+    }
+    if (m->transform) { /* the other closed forms: as mk_distance, converting what the pair reads */
+        if ((st = m->transform(a, &xa, b, &xb, &r)) != MK_OK) return st;
+        *overlapping = r.distance <= 0;
+        return MK_OK;
+    }
+    mk_pose_set_(&pa, &xa);
+    mk_pose_set_(&pb, &xb);
     return overlap(a, &pa, b, &pb, cache, overlapping);
 }
 
@@ -753,7 +872,10 @@ mk_status mk_approx_distance(const mk_shape *a, mk_transform xa, const mk_shape 
     int ia = -1, ib;
     mk_pose pa, pb;
     if (!a || !b || !out) return MK_ERR_NULL;
-    if ((st = poses_of(a, &xa, b, &xb, &pa, &pb)) != MK_OK || (st = check(a, &pa, b, &pb)) != MK_OK) return st;
+    if (!mk_transform_ok_(&xa) || !mk_transform_ok_(&xb)) return diagnose_transforms(a, &xa, b, &xb);
+    mk_pose_set_(&pa, &xa);
+    mk_pose_set_(&pb, &xb);
+    if ((st = check(a, &pa, b, &pb)) != MK_OK) return st;
     if (!mk_core_is_polytope(a) || !mk_core_is_polytope(b)) return MK_ERR_UNSUPPORTED;
     p = mk_pair_of_poses_(a, &pa, b, &pb);
     /* Start from A's vertex facing B rather than an arbitrary one: one support, a better bound. */

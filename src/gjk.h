@@ -92,6 +92,14 @@ MK_ALWAYS_INLINE mk_mat3 mk_rotation_of(mk_quat q)
                         mk_v3(s * (xz + wy), s * (yz - wx), 1 - s * (xx + yy)));
 }
 
+/* The third column of mk_rotation_of(q) (the body's z axis: a capsule's
+ * axis), by the same operations, so both give the same bits. */
+MK_ALWAYS_INLINE mk_vec3 mk_rotation_z_of(mk_quat q)
+{
+    mk_real s = mk_two_over_len2(q);
+    return mk_v3(s * (q.x * q.z + q.w * q.y), s * (q.y * q.z - q.w * q.x), 1 - s * (q.x * q.x + q.y * q.y));
+}
+
 /* Support of A - B along d (A's frame) for shapes of types ta, tb; ha, hb:
  * hints (previous vertex indices), returned as the new indices. */
 MK_ALWAYS_INLINE mk_cso_vertex mk_pair_support_typed(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, mk_vec3 d,

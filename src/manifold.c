@@ -10,6 +10,7 @@
 #include "pose.h"
 #include "polytope.h"
 #include "sat.h"
+#include "shape_internal.h"
 
 /* A pair routine fills m (in A's frame) or refuses the pair. */
 typedef mk_status (*pair_fn)(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache);
@@ -347,6 +348,29 @@ static int polytopes_apart(const mk_shape *a, mk_vec3 pa, const mk_shape *b, mk_
     return mk_v3_len2(mk_v3_sub(pb, pa)) > reach * reach;
 }
 
+/* Two boxes that were apart last frame along a face axis and still are:
+ * that one axis straight from the world poses (mk_sat_box_box_face_apart),
+ * before the relative pose or anything else is built, and the hint kept for
+ * the next frame. Broadphase pairs of boxes whose bounding boxes overlap
+ * mostly end here. Otherwise the hint is dropped (the full search answers
+ * exactly as with it) and 0 returned. */
+static int boxes_stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                            mk_manifold_cache *cache)
+{
+    mk_sat_result sat;
+    mk_real rr = a->radius + b->radius;
+    mk_sat_kind kind = (mk_sat_kind)(cache->axis - APART_HINT);
+    if (mk_sat_box_box_face_apart(a->u.half_extents, b->u.half_extents, &xa->r, &xb->r, xa->p, xb->p, kind,
+                                  kind == MK_SAT_FACE_A ? cache->reference : (int)cache->face - 1, margin + rr, &sat) &&
+        sat.best - rr > margin) {
+        cache->reference = sat.a;
+        cache->face = (mk_feature)(sat.b + 1);
+        return 1;
+    }
+    if (kind != MK_SAT_EDGES) cache->axis = cache->reference = 0, cache->face = 0;
+    return 0;
+}
+
 /* Two polytopes (boxes, hulls): SAT (src/sat.h; the 15-axis closed form for
  * two boxes), then a face axis clips the incident face against the
  * reference face and an edge axis gives the closest points of the two
@@ -517,11 +541,22 @@ mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *
     mk_pair p;
     mk_mf m;
     if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
-    if ((st = mk_shape_validate(a)) != MK_OK || (st = mk_shape_validate(b)) != MK_OK) return st;
+    if (!mk_shape_ok_typed_(a, a->type) || !mk_shape_ok_typed_(b, b->type)) {
+        if ((st = mk_shape_validate(a)) != MK_OK) return st;
+        return mk_shape_validate(b);
+    }
     if (!mk_pose_ok_(xa) || !mk_pose_ok_(xb)) return MK_ERR_UNCHECKED_POSE;
     if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
     if (margin < 0) return MK_ERR_BAD_ARGUMENT;
     if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
+#ifndef MK_WITHOUT_SAT
+    if (cache && cache->axis > APART_HINT && a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX &&
+        boxes_stay_apart(a, xa, b, xb, margin, cache)) {
+        out->count = 0;
+        out->normal = mk_v3(0, 0, 1);
+        return MK_OK;
+    }
+#endif
     fn = pair_table(a->type, b->type);
     if (!fn) {
         const mk_shape *s = a;

@@ -85,26 +85,35 @@ mk_status mk_pose_from_transform(mk_transform x, mk_pose *out)
     return MK_OK;
 }
 
-/* The largest deviation of r^T r from the identity. */
+/* The largest deviation of r^T r from the identity. Built with mk_max,
+ * which passes an infinity on but can drop a NaN; the caller's determinant
+ * test catches NaN instead (every entry of r is a factor in it). */
 static mk_real orthonormality_error(const mk_mat3 *r)
 {
-    mk_real e = mk_fabs_(mk_v3_len2(r->c0) - 1);
-    e = mk_max(e, mk_fabs_(mk_v3_len2(r->c1) - 1));
-    e = mk_max(e, mk_fabs_(mk_v3_len2(r->c2) - 1));
-    e = mk_max(e, mk_fabs_(mk_v3_dot(r->c0, r->c1)));
-    e = mk_max(e, mk_fabs_(mk_v3_dot(r->c0, r->c2)));
-    return mk_max(e, mk_fabs_(mk_v3_dot(r->c1, r->c2)));
+    mk_real e = mk_max(mk_fabs_(mk_v3_len2(r->c0) - 1), mk_fabs_(mk_v3_len2(r->c1) - 1));
+    e = mk_max(e, mk_max(mk_fabs_(mk_v3_len2(r->c2) - 1), mk_fabs_(mk_v3_dot(r->c0, r->c1))));
+    return mk_max(e, mk_max(mk_fabs_(mk_v3_dot(r->c0, r->c2)), mk_fabs_(mk_v3_dot(r->c1, r->c2))));
+}
+
+/* Names what mk_pose_from_matrix refused: non-finite numbers, then the
+ * range of p, then the rotation. */
+static MK_NOINLINE mk_status matrix_check(const mk_mat3 *r, mk_vec3 p)
+{
+    if (!mk_v3_is_valid(r->c0) || !mk_v3_is_valid(r->c1) || !mk_v3_is_valid(r->c2) || !mk_v3_is_valid(p)) return MK_ERR_NOT_FINITE;
+    return mk_position_is_valid(p) ? MK_ERR_BAD_ROTATION : MK_ERR_OUT_OF_RANGE;
 }
 
 mk_status mk_pose_from_matrix(mk_mat3 r, mk_vec3 p, mk_pose *out)
 {
     mk_real e;
     if (!out) return MK_ERR_NULL;
-    if (!mk_v3_is_valid(r.c0) || !mk_v3_is_valid(r.c1) || !mk_v3_is_valid(r.c2) || !mk_v3_is_valid(p)) return MK_ERR_NOT_FINITE;
-    if (!mk_position_is_valid(p)) return MK_ERR_OUT_OF_RANGE;
     e = orthonormality_error(&r);
-    /* Orthonormal within the tolerance and not a reflection (det = c2 . (c0 x c1) is then near +-1). */
-    if (!(e <= MK_ROTATION_TOLERANCE) || !(mk_v3_dot(r.c2, mk_v3_cross(r.c0, r.c1)) > 0)) return MK_ERR_BAD_ROTATION;
+    /* One test accepts: orthonormal within the tolerance (an infinite entry
+     * makes e infinite), not a reflection (det = c2 . (c0 x c1) is then near
+     * +-1; a NaN entry makes it NaN), and p in range (NaN fails too). So the
+     * accepting path checks finiteness without a test of its own. */
+    if (!(e <= MK_ROTATION_TOLERANCE) || !(mk_v3_dot(r.c2, mk_v3_cross(r.c0, r.c1)) > 0) || !mk_position_is_valid(p))
+        return matrix_check(&r, p);
     if (e > 32 * MK_REAL_EPSILON) {
         /* Drifted beyond rounding: queries take r^T as r's inverse, so hand them an exact rotation. */
         r.c0 = mk_v3_normalize(r.c0);
@@ -114,5 +123,14 @@ mk_status mk_pose_from_matrix(mk_mat3 r, mk_vec3 p, mk_pose *out)
     out->r = r;
     out->p = p;
     out->checked = MK_POSE_CHECKED_;
+    return MK_OK;
+}
+
+mk_status mk_pose_set_position(mk_pose *x, mk_vec3 p)
+{
+    if (!x) return MK_ERR_NULL;
+    if (!mk_pose_ok_(x)) return MK_ERR_UNCHECKED_POSE;
+    if (!mk_position_is_valid(p)) return mk_v3_is_valid(p) ? MK_ERR_OUT_OF_RANGE : MK_ERR_NOT_FINITE;
+    x->p = p;
     return MK_OK;
 }

@@ -551,15 +551,23 @@ static int box_edge(int axis, const mk_real *s)
  * A's extent along L is |R_i2j| a_i1 + |R_i1j| a_i2; B's is
  * sum_k |(R^T L)_k| b_k, from the products rather than the cofactor identity
  * of a rotation, which the rounded R satisfies only to a few ulps (and the
- * division by a small |L| would magnify). */
+ * division by a small |L| would magnify). An edge pair can change the
+ * answer only if it separates by more than `level`, the better face's
+ * separation (mk_sat_options: edges must beat the face); the offset less
+ * A's extent, u, bounds its separation times |L| from above (B's extent is
+ * >= 0), so one that cannot beat a negative level even so, u / |L| < level
+ * by a margin far above the rounding of either side (u^2 > lim |L|^2, lim
+ * = level^2 (1 + 64 eps); MK_REAL_MAX for a level >= 0), is dropped before
+ * B's extent, the square root and the division. */
 MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i,
-                                    int j, sat_axis *best)
+                                    int j, mk_real lim, sat_axis *best)
 {
     int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-    mk_real l2 = r[i1][j] * r[i1][j] + r[i2][j] * r[i2][j], sep;
+    mk_real l2 = r[i1][j] * r[i1][j] + r[i2][j] * r[i2][j], sep, u;
     if (!(l2 > SAT_PARALLEL * SAT_PARALLEL)) return;
-    sep = mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]) -
-          mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] -
+    u = mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]);
+    if (u < 0 && u * u > lim * l2) return;
+    sep = u - mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] -
           mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
     sep /= mk_sqrt_(l2);
     if (sep > best->sep) {
@@ -586,7 +594,7 @@ MK_ALWAYS_INLINE void box_first_axis(mk_real r[3][3], mk_real ar[3][3], const mk
         c->face_b.sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
         c->face_b.b = j;
     } else if (opt->first == MK_SAT_EDGES && i >= 0 && i < 24 && j >= 0 && j < 24) {
-        box_edge_axis(r, ar, a, b, d, mk_box_hull_edge_id(i) / 4, mk_box_hull_edge_id(j) / 4, &c->edges);
+        box_edge_axis(r, ar, a, b, d, mk_box_hull_edge_id(i) / 4, mk_box_hull_edge_id(j) / 4, -MK_REAL_MAX, &c->edges);
     }
     c->stopped = c->face_a.sep > c->stop || c->face_b.sep > c->stop || c->edges.sep > c->stop;
     if (!c->stopped) { /* not apart along it: the full search answers exactly as without the hint */
@@ -596,44 +604,71 @@ MK_ALWAYS_INLINE void box_first_axis(mk_real r[3][3], mk_real ar[3][3], const mk
     }
 }
 
-/* A face axis named by opt->first, straight from R before anything is set
- * up: a pair that stays apart along last frame's face axis (the common
- * case of boxes whose bounding boxes overlap) costs this and nothing else.
- * Returns 1 with *out filled as the full search would stop there. */
-static int box_hint_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+/* The separation along one face axis of two boxes: A's face axis k (kind
+ * MK_SAT_FACE_A) or B's (MK_SAT_FACE_B), from u, the axis's components
+ * along the other box's axes (row k of R for A's, column k for B's), and d,
+ * B's centre's offset along it. Returns 1 with *out filled as the full
+ * search would stop there when it separates by more than stop. */
+static int face_apart(mk_vec3 ha, mk_vec3 hb, mk_sat_kind kind, int k, mk_vec3 u, mk_real d, mk_real stop, mk_sat_result *out)
 {
-    mk_real sep, s;
-    mk_vec3 n;
-    int i = opt->first_a, j = opt->first_b;
-    if (opt->first == MK_SAT_FACE_A && i >= 0 && i < 6) {
-        /* Row i of R: B's axes' components along A's axis i. */
-        mk_vec3 row = i < 2 ? mk_v3(R->c0.x, R->c1.x, R->c2.x) : i < 4 ? mk_v3(R->c0.y, R->c1.y, R->c2.y) : mk_v3(R->c0.z, R->c1.z, R->c2.z);
-        mk_real d = i < 2 ? t.x : i < 4 ? t.y : t.z, h = i < 2 ? ha.x : i < 4 ? ha.y : ha.z;
-        sep = mk_fabs_(d) - h - (mk_fabs_(row.x) * hb.x + mk_fabs_(row.y) * hb.y + mk_fabs_(row.z) * hb.z);
-        if (!(sep > opt->stop_above)) return 0;
-        s = d >= 0 ? 1 : -1;
-        i /= 2;
-        out->kind = MK_SAT_FACE_A;
-        out->a = 2 * i + (d >= 0);
+    int of_a = kind == MK_SAT_FACE_A;
+    mk_vec3 own = of_a ? ha : hb, other = of_a ? hb : ha;
+    mk_real h = k == 0 ? own.x : k == 1 ? own.y : own.z, s = d >= 0 ? 1 : -1;
+    mk_real sep = mk_fabs_(d) - h - (mk_fabs_(u.x) * other.x + mk_fabs_(u.y) * other.y + mk_fabs_(u.z) * other.z);
+    if (!(sep > stop)) return 0;
+    out->kind = kind;
+    if (of_a) {
+        out->a = 2 * k + (d >= 0);
         out->b = -1;
-        out->normal = mk_v3(i == 0 ? s : 0, i == 1 ? s : 0, i == 2 ? s : 0);
-    } else if (opt->first == MK_SAT_FACE_B && j >= 0 && j < 6) {
-        mk_vec3 col = j < 2 ? R->c0 : j < 4 ? R->c1 : R->c2;
-        mk_real d = mk_v3_dot(col, t), h = j < 2 ? hb.x : j < 4 ? hb.y : hb.z;
-        sep = mk_fabs_(d) - h - (mk_fabs_(col.x) * ha.x + mk_fabs_(col.y) * ha.y + mk_fabs_(col.z) * ha.z);
-        if (!(sep > opt->stop_above)) return 0;
-        s = d >= 0 ? 1 : -1;
-        n = mk_v3_scale(col, s);
-        out->kind = MK_SAT_FACE_B;
-        out->a = -1;
-        out->b = 2 * (j / 2) + (d < 0);
-        out->normal = n;
+        out->normal = mk_v3(k == 0 ? s : 0, k == 1 ? s : 0, k == 2 ? s : 0);
     } else {
-        return 0;
+        out->a = -1;
+        out->b = 2 * k + (d < 0);
+        out->normal = mk_v3_scale(u, s);
     }
     out->best = out->separation = sep;
     out->complete = 0;
     return 1;
+}
+
+/* Is the face index named by a hint (opt->first and its index) valid? */
+static int face_hint(mk_sat_kind kind, int face) { return (kind == MK_SAT_FACE_A || kind == MK_SAT_FACE_B) && face >= 0 && face < 6; }
+
+int mk_sat_box_box_face_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 pa, mk_vec3 pb,
+                              mk_sat_kind kind, int face, mk_real stop, mk_sat_result *out)
+{
+    int k = face / 2;
+    mk_vec3 dp = mk_v3_sub(pb, pa), u;
+    if (!face_hint(kind, face)) return 0;
+    /* The entries of R = ra^T rb and t = ra^T dp that the axis needs, formed
+     * as mk_pair_of_poses_ forms them, so the answer is mk_sat_box_box's. */
+    if (kind == MK_SAT_FACE_A) {
+        mk_vec3 e = k == 0 ? ra->c0 : k == 1 ? ra->c1 : ra->c2;
+        return face_apart(ha, hb, kind, k, mk_v3(mk_v3_dot(e, rb->c0), mk_v3_dot(e, rb->c1), mk_v3_dot(e, rb->c2)), mk_v3_dot(e, dp),
+                          stop, out);
+    }
+    {
+        mk_vec3 e = k == 0 ? rb->c0 : k == 1 ? rb->c1 : rb->c2;
+        u = mk_mat3_tmul_v3(*ra, e);
+        return face_apart(ha, hb, kind, k, u, mk_v3_dot(u, mk_mat3_tmul_v3(*ra, dp)), stop, out);
+    }
+}
+
+/* A face axis named by opt->first, straight from R before anything is set
+ * up: a pair that stays apart along last frame's face axis (the common
+ * case of boxes whose bounding boxes overlap) costs this and nothing else. */
+static int box_hint_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    int face = opt->first == MK_SAT_FACE_A ? opt->first_a : opt->first_b, k = face / 2;
+    mk_vec3 u;
+    if (!face_hint(opt->first, face)) return 0;
+    if (opt->first == MK_SAT_FACE_A) {
+        /* Row k of R: B's axes' components along A's axis k. */
+        u = k == 0 ? mk_v3(R->c0.x, R->c1.x, R->c2.x) : k == 1 ? mk_v3(R->c0.y, R->c1.y, R->c2.y) : mk_v3(R->c0.z, R->c1.z, R->c2.z);
+        return face_apart(ha, hb, opt->first, k, u, k == 0 ? t.x : k == 1 ? t.y : t.z, opt->stop_above, out);
+    }
+    u = k == 0 ? R->c0 : k == 1 ? R->c1 : R->c2;
+    return face_apart(ha, hb, opt->first, k, u, mk_v3_dot(u, t), opt->stop_above, out);
 }
 
 /* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
@@ -684,15 +719,17 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
     /* Edge pairs: only the winner's normal and features are worked out. */
     if (!c.stopped) {
         /* Spelled out: with constant indices the axes' terms stay in registers. */
-        box_edge_axis(r, ar, a, b, d, 0, 0, &c.edges);
-        box_edge_axis(r, ar, a, b, d, 0, 1, &c.edges);
-        box_edge_axis(r, ar, a, b, d, 0, 2, &c.edges);
-        box_edge_axis(r, ar, a, b, d, 1, 0, &c.edges);
-        box_edge_axis(r, ar, a, b, d, 1, 1, &c.edges);
-        box_edge_axis(r, ar, a, b, d, 1, 2, &c.edges);
-        box_edge_axis(r, ar, a, b, d, 2, 0, &c.edges);
-        box_edge_axis(r, ar, a, b, d, 2, 1, &c.edges);
-        box_edge_axis(r, ar, a, b, d, 2, 2, &c.edges);
+        mk_real level = mk_max(c.face_a.sep, c.face_b.sep);
+        mk_real lim = level < 0 ? level * level * (1 + 64 * MK_REAL_EPSILON) : MK_REAL_MAX;
+        box_edge_axis(r, ar, a, b, d, 0, 0, lim, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 0, 1, lim, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 0, 2, lim, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 1, 0, lim, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 1, 1, lim, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 1, 2, lim, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 2, 0, lim, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 2, 1, lim, &c.edges);
+        box_edge_axis(r, ar, a, b, d, 2, 2, lim, &c.edges);
         if (c.edges.sep > c.stop) c.stopped = 1;
     }
     /* The normal and feature indices of the chosen axis only. */

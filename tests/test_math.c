@@ -212,7 +212,54 @@ START_TEST(pose_from_matrix)
     MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_BAD_ROTATION);
     m = mk_mat3_cols(mk_v3_zero(), mk_v3_zero(), mk_v3_zero());
     MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_BAD_ROTATION);
+    /* The accepting test has no finiteness check of its own: a NaN or an
+     * infinity in any entry of r, alone or with a bad position, must still
+     * be named MK_ERR_NOT_FINITE (a NaN would slip through the max of the
+     * orthonormality errors; the determinant stops it). */
+    for (i = 0; i < 9; ++i) {
+        const mk_real bad[3] = {(mk_real)NAN, (mk_real)INFINITY, -(mk_real)INFINITY};
+        int k;
+        for (k = 0; k < 3; ++k) {
+            m = mk_mat3_from_quat(mk_rng_quat(&r));
+            (&m.c0.x)[i] = bad[k];
+            MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_NOT_FINITE);
+            MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3(0, 2 * MK_MAX_COORD, 0), &p), MK_ERR_NOT_FINITE);
+        }
+    }
+    /* Finite but so large that r^T r overflows: a bad rotation, not a crash. */
+    m = mk_mat3_identity();
+    m.c2.z = MK_REAL_MAX;
+    MK_ASSERT_STATUS(mk_pose_from_matrix(m, mk_v3_zero(), &p), MK_ERR_BAD_ROTATION);
     ck_assert(memcmp(&p, &before, sizeof p) == 0); /* untouched on error */
+}
+END_TEST
+
+/* mk_pose_set_position moves a checked pose and keeps its rotation bits;
+ * the position gets the constructors' checks, a raw pose is refused, and a
+ * refusal leaves the pose as it was. */
+START_TEST(pose_set_position)
+{
+    mk_rng r = {23};
+    mk_pose p, q, before, raw;
+    mk_quat rot = mk_rng_quat(&r);
+    mk_vec3 x = mk_rng_v3(&r, -100, 100);
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(mk_rng_v3(&r, -100, 100), rot), &p), MK_OK);
+    MK_ASSERT_STATUS(mk_pose_from_transform(mk_transform_make(x, rot), &q), MK_OK);
+    MK_ASSERT_STATUS(mk_pose_set_position(&p, x), MK_OK);
+    /* The same pose as made afresh (fields compared: the struct has padding). */
+    ck_assert(memcmp(&p.r, &q.r, sizeof p.r) == 0 && memcmp(&p.p, &q.p, sizeof p.p) == 0 && p.checked == q.checked);
+    before = p;
+    MK_ASSERT_STATUS(mk_pose_set_position(NULL, x), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_pose_set_position(&p, mk_v3(0, (mk_real)NAN, 0)), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_pose_set_position(&p, mk_v3(0, 0, -(mk_real)INFINITY)), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_pose_set_position(&p, mk_v3(2 * MK_MAX_COORD, 0, 0)), MK_ERR_OUT_OF_RANGE);
+    ck_assert(memcmp(&p.r, &before.r, sizeof p.r) == 0 && memcmp(&p.p, &before.p, sizeof p.p) == 0 && p.checked == before.checked);
+    MK_ASSERT_STATUS(mk_pose_set_position(&p, mk_v3(MK_MAX_COORD, -MK_MAX_COORD, 0)), MK_OK); /* the bound is inclusive */
+    ck_assert(p.p.x == MK_MAX_COORD && memcmp(&p.r, &before.r, sizeof p.r) == 0);
+    memset(&raw, 0, sizeof raw);
+    raw.r = mk_mat3_identity();
+    MK_ASSERT_STATUS(mk_pose_set_position(&raw, x), MK_ERR_UNCHECKED_POSE);
+    ck_assert(raw.checked == 0 && raw.p.x == 0);
 }
 END_TEST
 
@@ -255,6 +302,7 @@ static Suite *math_suite(void)
     tcase_add_test(tc, aabb_closed_intervals);
     tcase_add_test(tc, pose_from_transform);
     tcase_add_test(tc, pose_from_matrix);
+    tcase_add_test(tc, pose_set_position);
     tcase_add_test(tc, coordinate_bound);
     suite_add_tcase(s, tc);
     return s;

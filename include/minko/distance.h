@@ -24,9 +24,11 @@
  * forms with one implementation: the _pose form takes poses checked once by
  * mk_pose_from_transform / mk_pose_from_matrix (minko/math3d.h) and only
  * reads their tag (MK_ERR_UNCHECKED_POSE otherwise), which is what an engine
- * that keeps rotation matrices calls; the mk_transform form checks and
- * converts its two transforms, then runs the same code. Nothing here
- * allocates. Plane-plane pairs are unsupported.
+ * that keeps rotation matrices calls; the mk_transform form checks both
+ * transforms in full (a sphere's non-unit quaternion is still
+ * MK_ERR_BAD_ROTATION), converts only what the pair reads (nothing for two
+ * spheres, a capsule's axis, a box's matrix) and computes the same answer bit
+ * for bit. Nothing here allocates. Plane-plane pairs are unsupported.
  */
 #ifndef MINKO_DISTANCE_H
 #define MINKO_DISTANCE_H

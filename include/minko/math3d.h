@@ -1,7 +1,7 @@
 /* minko/math3d.h: vectors, quaternions, 3x3 matrices, rigid transforms, poses, AABBs.
  *
- * Contract. Plain structs passed by value; every function but the two pose
- * constructors is C99 `inline` here and also exported from the library under
+ * Contract. Plain structs passed by value; every function but the pose
+ * functions is C99 `inline` here and also exported from the library under
  * the same name. No function allocates, reads global state or asserts.
  * Functions that can meet a degenerate input say what they return for it
  * (mk_v3_normalize of a zero vector returns the zero vector). Validators
@@ -37,9 +37,10 @@ typedef struct mk_aabb { mk_vec3 lo, hi; } mk_aabb;           /* closed box [lo,
 
 /* A rigid pose checked once (see the contract): x -> r x + p. Read the
  * fields freely; make it only with mk_pose_from_transform or
- * mk_pose_from_matrix. `checked` records that it passed (a zeroed or
- * hand-filled pose is refused by the queries with MK_ERR_UNCHECKED_POSE);
- * writing r or p afterwards is not detected, so re-make the pose instead. */
+ * mk_pose_from_matrix, move it with mk_pose_set_position. `checked` records
+ * that it passed (a zeroed or hand-filled pose is refused by the queries
+ * with MK_ERR_UNCHECKED_POSE); writing r or p directly is not detected, so
+ * use those functions instead. */
 typedef struct mk_pose {
     mk_mat3 r;        /* rotation: columns are the body's x, y, z axes in world, orthonormal, det +1 */
     mk_vec3 p;        /* position of the body's origin, within MK_MAX_COORD */
@@ -246,6 +247,13 @@ MK_API mk_status mk_pose_from_transform(mk_transform x, mk_pose *out);
  * its Gram-Schmidt orthonormalisation (x axis kept, then y), so queries
  * always work with an exact rotation. O(1). */
 MK_API mk_status mk_pose_from_matrix(mk_mat3 r, mk_vec3 p, mk_pose *out);
+/* Moves a checked pose to position p and keeps its rotation: the re-pose of
+ * a body whose rotation did not change (it only translated, or a host
+ * re-poses every body each step), without re-checking the rotation. p is
+ * range-checked as the constructors do. MK_ERR_NULL, MK_ERR_UNCHECKED_POSE
+ * (*x was not made by a constructor), MK_ERR_NOT_FINITE or
+ * MK_ERR_OUT_OF_RANGE leave *x untouched. O(1), a handful of comparisons. */
+MK_API mk_status mk_pose_set_position(mk_pose *x, mk_vec3 p);
 
 /* ---- AABBs ---- */
 MK_API MK_INLINE mk_aabb mk_aabb_make(mk_vec3 lo, mk_vec3 hi) { mk_aabb b; b.lo = lo; b.hi = hi; return b; }
