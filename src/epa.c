@@ -162,64 +162,98 @@ static int known_vertex(const epa_poly *P, const mk_cso_vertex *w)
     return 0;
 }
 
-/* Removes every face vertex wi sees and fans the silhouette to wi. The flood
- * fill is a depth-first walk from f0 (which sees wi) that enters each face
- * through one edge and then tries its other two edges in loop order, so the
- * silhouette edges come out in order around the hole (Bullet's EPA walks the
- * same way): new face k meets new face k + 1 along (b_k, wi), with no search.
- * Returns 0 on a defect (a silhouette that does not close); the polytope is
- * then abandoned, so partial updates do not matter. */
+/* The hole a new vertex w cuts: the faces it sees, and the silhouette edges
+ * (a_k -> b_k of a removed face, across which face g_k keeps edge j_k) in
+ * order around the hole. */
+typedef struct epa_hole {
+    mk_vec3 w;
+    int nr, nh;
+    short removed[MK_EPA_MAX_FACES], g[MK_EPA_MAX_FACES], a[MK_EPA_MAX_FACES], b[MK_EPA_MAX_FACES];
+    unsigned char j[MK_EPA_MAX_FACES];
+} epa_hole;
+
+static const unsigned char next3[5] = {1, 2, 0, 1, 2};
+
+static void flood(epa_poly *P, epa_hole *H, int f, int e);
+
+/* Edge i of removed face f: floods on into the face across it if that face
+ * sees w, else records the edge as the next silhouette edge. */
+static void cross_edge(epa_poly *P, epa_hole *H, int f, int i)
+{
+    int g = P->f[f].adj[i], j = P->f[f].edge[i];
+    if (!P->f[g].live) return;
+    if (mk_v3_dot(P->f[g].n, H->w) - P->f[g].dist > P->tol) {
+        flood(P, H, g, j);
+        return;
+    }
+    H->g[H->nh] = (short)g;
+    H->j[H->nh] = (unsigned char)j;
+    H->a[H->nh] = P->f[f].v[i];
+    H->b[H->nh++] = P->f[f].v[next3[i]];
+}
+
+/* Face f, which sees w, was entered across its edge e: removes it and walks
+ * its other two edges in loop order, depth first, so the silhouette edges
+ * come out in order around the hole (Bullet's EPA walks the same way): new
+ * face k then meets new face k + 1 along (b_k, w), with no search. Depth is
+ * at most the number of faces w sees. */
+static void flood(epa_poly *P, epa_hole *H, int f, int e)
+{
+    P->f[f].live = 0;
+    H->removed[H->nr++] = (short)f;
+    cross_edge(P, H, f, next3[e]);
+    cross_edge(P, H, f, next3[e + 1]);
+}
+
+/* Face f over silhouette edge (a, b) and apex w, given d_a = a - w and
+ * d_b = b - w (each shared by the two new faces at that vertex): normal
+ * d_a x d_b = (b - a) x (w - a). 0 if degenerate or inverted (face_set). */
+static int fan_face(epa_poly *P, int f, int a, int b, int wi, mk_vec3 da, mk_vec3 db)
+{
+    epa_face *F = &P->f[f];
+    mk_vec3 n = mk_v3_cross(da, db);
+    mk_real l2 = mk_v3_len2(n);
+    F->v[0] = (short)a;
+    F->v[1] = (short)b;
+    F->v[2] = (short)wi;
+    F->live = 1;
+    if (!(l2 > 0)) return 0;
+    F->n = mk_v3_scale(n, 1 / mk_sqrt_(l2));
+    /* through the centroid, as face_set: w + (d_a + d_b) / 3 */
+    F->dist = mk_v3_dot(F->n, P->v[wi].w) + mk_v3_dot(F->n, mk_v3_add(da, db)) * (MK_REAL(1.0) / 3);
+    return F->dist >= -P->tol;
+}
+
+/* Removes every face vertex wi sees (f0 among them) and fans the silhouette
+ * to wi. Returns 0 on a defect (a silhouette that does not close); the
+ * polytope is then abandoned, so partial updates do not matter. */
 static int expand(epa_poly *P, int f0, int wi)
 {
-    static const unsigned char next3[5] = {1, 2, 0, 1, 2};
-    short stack_f[MK_EPA_MAX_FACES], removed[MK_EPA_MAX_FACES], nf_new[MK_EPA_MAX_FACES];
-    short hz_g[MK_EPA_MAX_FACES], hz_a[MK_EPA_MAX_FACES], hz_b[MK_EPA_MAX_FACES];
-    unsigned char stack_e[MK_EPA_MAX_FACES], stack_left[MK_EPA_MAX_FACES], hz_j[MK_EPA_MAX_FACES];
-    int sp = 0, nr = 0, nh = 0, k;
-    mk_vec3 w = P->v[wi].w;
-    P->f[f0].live = 0;
-    removed[nr++] = (short)f0;
-    stack_f[sp] = (short)f0;
-    stack_e[sp] = 0;
-    stack_left[sp++] = 3;
-    while (sp > 0) {
-        int f = stack_f[sp - 1], i = stack_e[sp - 1], g, j;
-        if (stack_left[sp - 1] == 0) {
-            --sp;
-            continue;
-        }
-        stack_e[sp - 1] = next3[i];
-        stack_left[sp - 1]--;
-        g = P->f[f].adj[i];
-        j = P->f[f].edge[i];
-        if (!P->f[g].live) continue;
-        if (mk_v3_dot(P->f[g].n, w) - P->f[g].dist > P->tol) {
-            P->f[g].live = 0;
-            removed[nr++] = (short)g;
-            stack_f[sp] = (short)g;
-            stack_e[sp] = next3[j];
-            stack_left[sp++] = 2;
-        } else {
-            hz_g[nh] = (short)g;
-            hz_j[nh] = (unsigned char)j;
-            hz_a[nh] = P->f[f].v[i];
-            hz_b[nh] = P->f[f].v[next3[i]];
-            nh++;
-        }
+    epa_hole H;
+    short nf_new[MK_EPA_MAX_FACES];
+    mk_vec3 d0, da;
+    int k;
+    H.w = P->v[wi].w;
+    H.nr = H.nh = 0;
+    /* f0 is entered across no edge: its edges 0 and 1 by flood, then 2 */
+    flood(P, &H, f0, 2);
+    cross_edge(P, &H, f0, 2);
+    if (H.nh < 3) return 0;
+    for (k = 0; k < H.nr; ++k) {
+        P->f[H.removed[k]].dist = (mk_real)HUGE_VAL; /* out of nearest_face's way until reused */
+        P->free_faces[P->nfree++] = H.removed[k];
     }
-    if (nh < 3) return 0;
-    for (k = 0; k < nr; ++k) {
-        P->f[removed[k]].dist = (mk_real)HUGE_VAL; /* out of nearest_face's way until reused */
-        P->free_faces[P->nfree++] = removed[k];
-    }
-    for (k = 0; k < nh; ++k) {
-        int f = face_alloc(P);
-        if (hz_b[k] != hz_a[k + 1 < nh ? k + 1 : 0] || f < 0 || !face_set(P, f, hz_a[k], hz_b[k], wi)) return 0;
-        link(P, f, 0, hz_g[k], hz_j[k]);
+    d0 = da = mk_v3_sub(P->v[H.a[0]].w, H.w);
+    for (k = 0; k < H.nh; ++k) {
+        int f = face_alloc(P), last = k + 1 == H.nh;
+        mk_vec3 db = last ? d0 : mk_v3_sub(P->v[H.b[k]].w, H.w);
+        if (H.b[k] != H.a[last ? 0 : k + 1] || f < 0 || !fan_face(P, f, H.a[k], H.b[k], wi, da, db)) return 0;
+        link(P, f, 0, H.g[k], H.j[k]);
         nf_new[k] = (short)f;
+        da = db;
     }
     /* Close the fan: the face over (a, b) meets the next one, over (b, c), along (b, w). */
-    for (k = 0; k < nh; ++k) link(P, nf_new[k], 1, nf_new[k + 1 < nh ? k + 1 : 0], 2);
+    for (k = 0; k < H.nh; ++k) link(P, nf_new[k], 1, nf_new[k + 1 < H.nh ? k + 1 : 0], 2);
     return 1;
 }
 
@@ -271,6 +305,37 @@ static int flat_answer(const mk_pair *p, const mk_simplex *s, mk_epa_result *out
     return -1;
 }
 
+/* The index of F's vertex highest along n on one side (sign 1: A's point a,
+ * -1: B's point b), as that side's support hint. */
+MK_ALWAYS_INLINE int highest_hint(const epa_poly *P, const epa_face *F, mk_vec3 n, int side_a)
+{
+    const mk_cso_vertex *v0 = &P->v[F->v[0]], *v1 = &P->v[F->v[1]], *v2 = &P->v[F->v[2]];
+    if (side_a) {
+        mk_real d0 = mk_v3_dot(n, v0->a), d1 = mk_v3_dot(n, v1->a), d2 = mk_v3_dot(n, v2->a);
+        return d1 > d0 ? (d2 > d1 ? v2->ia : v1->ia) : (d2 > d0 ? v2->ia : v0->ia);
+    } else {
+        mk_real d0 = mk_v3_dot(n, v0->b), d1 = mk_v3_dot(n, v1->b), d2 = mk_v3_dot(n, v2->b);
+        return d1 < d0 ? (d2 < d1 ? v2->ib : v1->ib) : (d2 < d0 ? v2->ib : v0->ib);
+    }
+}
+
+/* Does the support of s (type t) walk from its hint (hull_support.h)? */
+static int climbs(const mk_shape *s, mk_shape_type t)
+{
+    return t == MK_SHAPE_HULL && s->u.hull->vertex_count > MK_HULL_SCAN_MAX;
+}
+
+/* The support along face F's normal. A hull that climbs starts from the
+ * vertex of F highest along the normal on its side (F's vertices are
+ * supports along nearby directions, the highest the fewest steps from the
+ * new one: hull_hull_128 -3 % instructions); scans and boxes ignore hints. */
+MK_ALWAYS_INLINE mk_cso_vertex support_from_face(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, int climb_a,
+                                                 int climb_b, const epa_poly *P, const epa_face *F)
+{
+    int ha = climb_a ? highest_hint(P, F, F->n, 1) : -1, hb = climb_b ? highest_hint(P, F, F->n, 0) : -1;
+    return mk_pair_support_typed(p, ta, tb, F->n, ha, hb);
+}
+
 /* The loop, inlined into one copy per specialised pair of shape types (as
  * GJK's: the supports lose their type switches) and one generic copy. */
 MK_ALWAYS_INLINE int epa_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type tb, const mk_simplex *s, mk_real scale,
@@ -279,7 +344,7 @@ MK_ALWAYS_INLINE int epa_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type 
     epa_poly P;
     epa_face best;
     mk_cso_vertex t[4];
-    int it;
+    int it, climb_a = climbs(p->a, ta), climb_b = climbs(p->b, tb);
     P.p = p;
     P.tol = MK_GJK_ABS_TOL * scale;
     if (!blow_up(p, s, P.tol, t) || !init_tetrahedron(&P, t)) return flat_answer(p, s, out);
@@ -290,7 +355,7 @@ MK_ALWAYS_INLINE int epa_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type 
         best = P.f[f]; /* expand may reuse f's slot before it finds a defect */
         out->iterations = it + 1;
         if (P.nv == MK_EPA_MAX_VERTICES) break;
-        w = mk_pair_support_typed(p, ta, tb, best.n, P.v[best.v[0]].ia, P.v[best.v[0]].ib);
+        w = support_from_face(p, ta, tb, climb_a, climb_b, &P, &best);
         if (known_vertex(&P, &w) || mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol) {
             /* w is the support along the answer's normal: its sep, for free */
             out->separation = -mk_v3_dot(best.n, w.w);

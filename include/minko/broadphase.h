@@ -16,7 +16,9 @@
  * exact, sorted set either way. Three structures sit behind one API and
  * give identical sets: brute force (the oracle), incremental sweep and prune,
  * and a hierarchical hash grid; MK_BP_AUTO picks one from scene statistics and
- * mk_bp_stats() says which. AABBs may have infinite sides (ground planes) but
+ * mk_bp_stats() says which (for a caller with events and many movers: SAP's
+ * swaps against the grid's candidates, estimated on a sample of movers every
+ * 32 updates). AABBs may have infinite sides (ground planes) but
  * no NaN, no lo > hi, and no lo = +inf or hi = -inf. Memory comes only from
  * the mk_allocator given at creation: the proxy capacity is fixed then, and
  * the pair set and the grid's cell pool grow by doubling inside mk_bp_update()
