@@ -28,10 +28,14 @@
 // mean points per manifold. JSON Lines per ../shared/BENCH_FORMAT.md (suite
 // "contacts", case "box_box") plus a table.
 //
-//   bench_contacts [--quick] [--json FILE] [--family stacked|random|apart] [--backend NAME]
+//   bench_contacts [--quick] [--loops N] [--json FILE] [--family stacked|random|apart] [--backend NAME]
 // (--family runs one case family, --backend one backend (a prefix of its
 // name: minko, minko.cold, minko.pose, bullet, ode), e.g. for callgrind instruction
-// counts; ratios are then to that backend.)
+// counts; ratios are then to that backend. --loops sets the number of timed
+// loops: under callgrind, the difference between two runs with different
+// --loops, divided by the extra loops times the cases, is the steady-state
+// (warm) instructions per query, without the untimed passes, the first of
+// which is cold.)
 
 #include <algorithm>
 #include <cmath>
@@ -436,13 +440,15 @@ int main(int argc, char **argv)
 {
     bool quick = false;
     const char *json = nullptr, *only = nullptr, *backend = nullptr;
+    int loops_arg = 0;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--quick")) quick = true;
+        else if (!strcmp(argv[i], "--loops") && i + 1 < argc && atoi(argv[i + 1]) > 0) loops_arg = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--json") && i + 1 < argc) json = argv[++i];
         else if (!strcmp(argv[i], "--family") && i + 1 < argc) only = argv[++i];
         else if (!strcmp(argv[i], "--backend") && i + 1 < argc) backend = argv[++i];
         else {
-            fprintf(stderr, "usage: %s [--quick] [--json FILE] [--family stacked|random|apart] [--backend NAME]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--quick] [--loops N] [--json FILE] [--family stacked|random|apart] [--backend NAME]\n", argv[0]);
             return 2;
         }
     }
@@ -452,7 +458,7 @@ int main(int argc, char **argv)
         return 2;
     }
     dInitODE2(0);
-    const int n = quick ? 400 : 4000, loops = quick ? 5 : 15;
+    const int n = quick ? 400 : 4000, loops = loops_arg ? loops_arg : quick ? 5 : 15;
     printf("bench_contacts: box-box manifolds, %d cases per family, best of %d loops; Minko %s, Bullet %s, ODE dReal %s\n", n,
            loops, mk_is_double_precision() ? "double" : "single", sizeof(btScalar) == 8 ? "double" : "float",
            sizeof(dReal) == 8 ? "double" : "float");

@@ -807,7 +807,9 @@ static mk_real area(mk_real ax, mk_real ay, mk_real bx, mk_real by, mk_real px, 
 
 int mk_mf_pick4(int n, const mk_real *x, const mk_real *y, const mk_real *depth, int k[4])
 {
-    mk_real extent = 0, best, sign, x0, y0, x1, y1, x2, y2;
+    /* dx, dy: each candidate from the deepest; a01: the area it spans with
+     * the deepest and the farthest (the same products as area()). */
+    mk_real extent = 0, best, sign, x0, y0, x1, y1, x2, y2, ex, ey, dx[MK_MF_MAX], dy[MK_MF_MAX], a01[MK_MF_MAX];
     int i, count = 2;
     k[0] = 0;
     k[1] = k[2] = k[3] = -1;
@@ -816,23 +818,23 @@ int mk_mf_pick4(int n, const mk_real *x, const mk_real *y, const mk_real *depth,
         if (depth[i] > depth[k[0]] + 64 * MK_REAL_EPSILON * extent) k[0] = i;
     x0 = x[k[0]], y0 = y[k[0]];
     for (best = 0, i = 0; i < n; ++i) {
-        mk_real dx = x[i] - x0, dy = y[i] - y0, s = dx * dx + dy * dy;
+        mk_real s;
+        dx[i] = x[i] - x0, dy[i] = y[i] - y0, s = dx[i] * dx[i] + dy[i] * dy[i];
         if (s * REDUCE_BIAS * REDUCE_BIAS > best) { best = s; k[1] = i; }
     }
     if (k[1] < 0) k[1] = k[0] == 0 ? 1 : 0; /* all candidates coincide */
-    x1 = x[k[1]], y1 = y[k[1]];
+    x1 = x[k[1]], y1 = y[k[1]], ex = x1 - x0, ey = y1 - y0;
     for (best = 0, i = 0; i < n; ++i) {
-        mk_real s = mk_fabs_(area(x0, y0, x1, y1, x[i], y[i]));
+        mk_real s = mk_fabs_(a01[i] = ex * dy[i] - ey * dx[i]);
         if (s * REDUCE_BIAS > best) { best = s; k[2] = i; }
     }
     if (k[2] < 0) return count;
     count = 3;
     x2 = x[k[2]], y2 = y[k[2]];
-    sign = area(x0, y0, x1, y1, x2, y2) > 0 ? 1 : -1;
+    sign = a01[k[2]] > 0 ? 1 : -1;
     for (best = 0, i = 0; i < n; ++i) {
         /* How far outside the triangle's sides the point lies: the area it adds to the patch. */
-        mk_real s = mk_max(-sign * area(x0, y0, x1, y1, x[i], y[i]),
-                           mk_max(-sign * area(x1, y1, x2, y2, x[i], y[i]), -sign * area(x2, y2, x0, y0, x[i], y[i])));
+        mk_real s = mk_max(-sign * a01[i], mk_max(-sign * area(x1, y1, x2, y2, x[i], y[i]), -sign * area(x2, y2, x0, y0, x[i], y[i])));
         if (s * REDUCE_BIAS > best) { best = s; k[3] = i; }
     }
     return k[3] >= 0 ? 4 : count;

@@ -236,7 +236,8 @@ static int face_witnesses(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, m
     return face_witness_on_a(p, d, n, tol, pa, pb) || face_witness_on_b(p, d, n, tol, pa, pb);
 }
 
-/* sep(u) of two box cores for a unit u from A towards B, in closed form. */
+/* sep(u) of two box cores for a unit u from A towards B, in closed form
+ * (for any u, |u| times that). */
 static mk_real box_box_separation(const mk_pair *p, mk_vec3 u)
 {
     return mk_v3_dot(u, p->t) - mk_v3_dot(mk_v3_abs(mk_mat3_tmul_v3(p->r, u)), p->b->u.half_extents) -
@@ -271,7 +272,9 @@ static mk_real corner_pair(const mk_pair *p, int side, int c, mk_vec3 *pa, mk_ve
 static int corner_certified(const mk_pair *p, int side, int c, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
 {
     mk_real l = mk_sqrt_(corner_pair(p, side, c, pa, pb));
-    if (!(l > 0) || !(box_box_separation(p, mk_v3_scale(mk_v3_sub(*pb, *pa), 1 / l)) >= l - tol)) return 0;
+    /* sep is positively homogeneous: sep(w) >= l (l - tol) for w = pb - pa
+     * is sep(w / l) >= l - tol without the division. */
+    if (!(l > 0) || !(box_box_separation(p, mk_v3_sub(*pb, *pa)) >= l * (l - tol))) return 0;
     *d = l;
     return 1;
 }
@@ -308,12 +311,18 @@ static void nearest_corner(const mk_pair *p, int *side, int *corner)
  * realises: the corners supporting SAT's best axis n first (usually the
  * answer), then the corner nearest the other box among all sixteen (sixteen
  * clamps, still far cheaper than GJK). */
-static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
+static int supporting_corners(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
 {
-    int fa = -1, fb = -1, side = 0, corner = 0;
+    int fa = -1, fb = -1;
     mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &fa);
     mk_core_support_typed(p->b, MK_SHAPE_BOX, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), &fb);
-    if (corner_certified(p, 0, fb, tol, d, pa, pb) || corner_certified(p, 1, fa, tol, d, pa, pb)) return 1;
+    return corner_certified(p, 0, fb, tol, d, pa, pb) || corner_certified(p, 1, fa, tol, d, pa, pb);
+}
+
+static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d, mk_vec3 *pa, mk_vec3 *pb)
+{
+    int side = 0, corner = 0;
+    if (supporting_corners(p, n, tol, d, pa, pb)) return 1;
     nearest_corner(p, &side, &corner);
     return corner_certified(p, side, corner, tol, d, pa, pb);
 }
@@ -374,7 +383,14 @@ static int box_box_sat(const mk_pair *p, answer *ans)
     d = box_face_axes(p, &n, &of_b);
     /* B's corner under A's face, or A's under B's: the other side almost never
      * holds off parallel faces, which SAT's path below still tries. */
-    if (!(d > 0) || !(of_b ? face_witness_on_b(p, d, n, tol, &pa, &pb) : face_witness_on_a(p, d, n, tol, &pa, &pb))) {
+    if (d > 0 && (of_b ? face_witness_on_b(p, d, n, tol, &pa, &pb) : face_witness_on_a(p, d, n, tol, &pa, &pb))) {
+        /* a corner under a face: d along n */
+    } else if (d > 0 && supporting_corners(p, n, tol, &d, &pa, &pb)) {
+        /* A corner and its clamp, certified along their own direction
+         * (corner_certified needs no SAT bound): vertex-edge and
+         * vertex-vertex pairs skip the nine edge axes. */
+        n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
+    } else {
         mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
         d = s.best;
         n = s.normal;

@@ -348,26 +348,28 @@ static int polytopes_apart(const mk_shape *a, mk_vec3 pa, const mk_shape *b, mk_
     return mk_v3_len2(mk_v3_sub(pb, pa)) > reach * reach;
 }
 
-/* Two boxes that were apart last frame along a face axis and still are:
- * that one axis straight from the world poses (mk_sat_box_box_face_apart),
+/* Two boxes that were apart last frame and still are along the same axis:
+ * that one axis straight from the world poses (mk_sat_box_box_hint_apart),
  * before the relative pose or anything else is built, and the hint kept for
- * the next frame. Broadphase pairs of boxes whose bounding boxes overlap
- * mostly end here. Otherwise the hint is dropped (the full search answers
- * exactly as with it) and 0 returned. */
+ * the next frame (an edge axis stays named as one, even where polytopes()
+ * would rename it as a face it has become parallel to: the same axis).
+ * Broadphase pairs of boxes whose bounding boxes overlap mostly end here.
+ * Otherwise the hint is dropped (the full search answers exactly as with
+ * it) and 0 returned. */
 static int boxes_stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
                             mk_manifold_cache *cache)
 {
     mk_sat_result sat;
     mk_real rr = a->radius + b->radius;
-    mk_sat_kind kind = (mk_sat_kind)(cache->axis - APART_HINT);
-    if (mk_sat_box_box_face_apart(a->u.half_extents, b->u.half_extents, &xa->r, &xb->r, xa->p, xb->p, kind,
-                                  kind == MK_SAT_FACE_A ? cache->reference : (int)cache->face - 1, margin + rr, &sat) &&
+    if (mk_sat_box_box_hint_apart(&a->u.half_extents, &b->u.half_extents, xa, xb, (mk_sat_kind)(cache->axis - APART_HINT), cache->reference,
+                                  (int)cache->face - 1, margin + rr, &sat) &&
         sat.best - rr > margin) {
         cache->reference = sat.a;
         cache->face = (mk_feature)(sat.b + 1);
         return 1;
     }
-    if (kind != MK_SAT_EDGES) cache->axis = cache->reference = 0, cache->face = 0;
+    cache->axis = cache->reference = 0;
+    cache->face = 0;
     return 0;
 }
 
@@ -532,32 +534,17 @@ static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair 
     }
 }
 
-mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
-                          mk_manifold_cache *cache, mk_manifold *out)
+/* mk_collide_pose after its checks: the pair routine, the reduction and
+ * the move to world space. Out of line, so the checks and the boxes'
+ * apart shortcut run without this frame (a whole mk_mf). */
+static MK_NOINLINE mk_status collide_checked(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                                             mk_manifold_cache *cache, mk_manifold *out)
 {
     mk_status st;
-    pair_fn fn;
+    pair_fn fn = pair_table(a->type, b->type);
     int swap = 0;
     mk_pair p;
     mk_mf m;
-    if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
-    if (!mk_shape_ok_typed_(a, a->type) || !mk_shape_ok_typed_(b, b->type)) {
-        if ((st = mk_shape_validate(a)) != MK_OK) return st;
-        return mk_shape_validate(b);
-    }
-    if (!mk_pose_ok_(xa) || !mk_pose_ok_(xb)) return MK_ERR_UNCHECKED_POSE;
-    if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
-    if (margin < 0) return MK_ERR_BAD_ARGUMENT;
-    if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
-#ifndef MK_WITHOUT_SAT
-    if (cache && cache->axis > APART_HINT && a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX &&
-        boxes_stay_apart(a, xa, b, xb, margin, cache)) {
-        out->count = 0;
-        out->normal = mk_v3(0, 0, 1);
-        return MK_OK;
-    }
-#endif
-    fn = pair_table(a->type, b->type);
     if (!fn) {
         const mk_shape *s = a;
         const mk_pose *x = xa;
@@ -587,6 +574,32 @@ mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *
     mk_mf_reduce(&m);
     finish(&m, &xa->r, xa->p, &p, swap, out);
     return MK_OK;
+}
+
+mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                          mk_manifold_cache *cache, mk_manifold *out)
+{
+    mk_status st;
+    if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
+    /* Two boxes (the common pair) are checked with their type known. */
+    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX ? !mk_shape_ok_typed_(a, MK_SHAPE_BOX) || !mk_shape_ok_typed_(b, MK_SHAPE_BOX)
+                                                          : !mk_shape_ok_typed_(a, a->type) || !mk_shape_ok_typed_(b, b->type)) {
+        if ((st = mk_shape_validate(a)) != MK_OK) return st;
+        return mk_shape_validate(b);
+    }
+    if (!mk_pose_ok_(xa) || !mk_pose_ok_(xb)) return MK_ERR_UNCHECKED_POSE;
+    if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
+    if (margin < 0) return MK_ERR_BAD_ARGUMENT;
+    if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
+#ifndef MK_WITHOUT_SAT
+    if (cache && cache->axis > APART_HINT && a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX &&
+        boxes_stay_apart(a, xa, b, xb, margin, cache)) {
+        out->count = 0;
+        out->normal = mk_v3(0, 0, 1);
+        return MK_OK;
+    }
+#endif
+    return collide_checked(a, xa, b, xb, margin, cache, out);
 }
 
 /* Checks and converts the transforms (after the shapes, in argument order),

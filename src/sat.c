@@ -577,6 +577,29 @@ MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_
     }
 }
 
+/* The kind, features, separation and normal of edge pair (e_i of A, R_j
+ * of B) into *out: L = e_i x R_j pointing from A to B; A's supporting edge
+ * sits at the corner with the signs of L, B's at the corner with those of
+ * -R^T L. Reads rows (i + 1) % 3 and (i + 2) % 3 of r and the same entries
+ * of d; row i and d[i] are multiplied by L_i = 0 only. */
+static void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, mk_real sep, mk_sat_result *out)
+{
+    static const unsigned char next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
+    int i1 = next[i], i2 = prev[i], lo = j == 0 ? 1 : 0, hi = j == 2 ? 1 : 2;
+    mk_real L[3], blo, bhi, l;
+    L[i] = 0, L[i1] = -r[i2][j], L[i2] = r[i1][j];
+    if (L[0] * d[0] + L[1] * d[1] + L[2] * d[2] < 0) L[0] = -L[0], L[1] = -L[1], L[2] = -L[2];
+    /* The two components of -R^T L that name B's edge (box_edge(j, .)). */
+    blo = -(r[0][lo] * L[0] + r[1][lo] * L[1] + r[2][lo] * L[2]);
+    bhi = -(r[0][hi] * L[0] + r[1][hi] * L[1] + r[2][hi] * L[2]);
+    l = mk_sqrt_(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+    out->kind = MK_SAT_EDGES;
+    out->a = box_half_edge[box_edge(i, L)];
+    out->b = box_half_edge[4 * j + (blo > 0) + 2 * (bhi > 0)];
+    out->separation = sep;
+    out->normal = mk_v3(L[0] / l, L[1] / l, L[2] / l);
+}
+
 /* The separation along opt->first (named as mk_sat_result names box axes:
  * a face index, or the box view's half-edges), kept only if it ends the
  * search. */
@@ -609,12 +632,13 @@ MK_ALWAYS_INLINE void box_first_axis(mk_real r[3][3], mk_real ar[3][3], const mk
  * along the other box's axes (row k of R for A's, column k for B's), and d,
  * B's centre's offset along it. Returns 1 with *out filled as the full
  * search would stop there when it separates by more than stop. */
-static int face_apart(mk_vec3 ha, mk_vec3 hb, mk_sat_kind kind, int k, mk_vec3 u, mk_real d, mk_real stop, mk_sat_result *out)
+MK_ALWAYS_INLINE int face_apart(const mk_vec3 *ha, const mk_vec3 *hb, mk_sat_kind kind, int k, mk_vec3 u, mk_real d, mk_real stop,
+                                mk_sat_result *out)
 {
     int of_a = kind == MK_SAT_FACE_A;
-    mk_vec3 own = of_a ? ha : hb, other = of_a ? hb : ha;
-    mk_real h = k == 0 ? own.x : k == 1 ? own.y : own.z, s = d >= 0 ? 1 : -1;
-    mk_real sep = mk_fabs_(d) - h - (mk_fabs_(u.x) * other.x + mk_fabs_(u.y) * other.y + mk_fabs_(u.z) * other.z);
+    const mk_vec3 *own = of_a ? ha : hb, *other = of_a ? hb : ha;
+    mk_real h = k == 0 ? own->x : k == 1 ? own->y : own->z, s = d >= 0 ? 1 : -1;
+    mk_real sep = mk_fabs_(d) - h - (mk_fabs_(u.x) * other->x + mk_fabs_(u.y) * other->y + mk_fabs_(u.z) * other->z);
     if (!(sep > stop)) return 0;
     out->kind = kind;
     if (of_a) {
@@ -634,24 +658,53 @@ static int face_apart(mk_vec3 ha, mk_vec3 hb, mk_sat_kind kind, int k, mk_vec3 u
 /* Is the face index named by a hint (opt->first and its index) valid? */
 static int face_hint(mk_sat_kind kind, int face) { return (kind == MK_SAT_FACE_A || kind == MK_SAT_FACE_B) && face >= 0 && face < 6; }
 
-int mk_sat_box_box_face_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 pa, mk_vec3 pb,
-                              mk_sat_kind kind, int face, mk_real stop, mk_sat_result *out)
+MK_ALWAYS_INLINE const mk_vec3 *column(const mk_mat3 *m, int k) { return k == 0 ? &m->c0 : k == 1 ? &m->c1 : &m->c2; }
+
+/* Edge pair hint (half-edges ea of A, eb of B) from world poses: the two
+ * rows of R and entries of t that box_edge_axis reads (row i and t_i only
+ * ever multiply L_i = 0: zeros), as mk_pair_of_poses_ forms them. */
+static int edge_hint_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 dp, int ea, int eb,
+                           mk_real stop, mk_sat_result *out)
 {
-    int k = face / 2;
-    mk_vec3 dp = mk_v3_sub(pb, pa), u;
+    mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
+    int i = mk_box_hull_edge_id(ea) / 4, j = mk_box_hull_edge_id(eb) / 4, n, k;
+    sat_axis best;
+    for (n = 1; n < 3; ++n) {
+        int row = (i + n) % 3;
+        const mk_vec3 *e = column(ra, row);
+        for (k = 0; k < 3; ++k) r[row][k] = mk_v3_dot(*e, *column(rb, k));
+        ar[row][j] = mk_fabs_(r[row][j]);
+        d[row] = mk_v3_dot(*e, dp);
+    }
+    r[i][0] = r[i][1] = r[i][2] = d[i] = 0;
+    a[0] = ha->x, a[1] = ha->y, a[2] = ha->z;
+    b[0] = hb->x, b[1] = hb->y, b[2] = hb->z;
+    best.sep = -MK_REAL_MAX;
+    box_edge_axis(r, ar, a, b, d, i, j, MK_REAL_MAX, &best);
+    if (!(best.sep > stop)) return 0;
+    edge_result(r, d, i, j, best.sep, out);
+    out->best = best.sep;
+    out->complete = 0;
+    return 1;
+}
+
+int mk_sat_box_box_hint_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_pose *xa, const mk_pose *xb, mk_sat_kind kind, int ia, int ib,
+                              mk_real stop, mk_sat_result *out)
+{
+    const mk_mat3 *ra = &xa->r, *rb = &xb->r;
+    mk_vec3 dp = mk_v3_sub(xb->p, xa->p), u;
+    int face = kind == MK_SAT_FACE_A ? ia : ib, k = face / 2;
+    if (kind == MK_SAT_EDGES) return ia >= 0 && ia < 24 && ib >= 0 && ib < 24 && edge_hint_apart(ha, hb, ra, rb, dp, ia, ib, stop, out);
     if (!face_hint(kind, face)) return 0;
-    /* The entries of R = ra^T rb and t = ra^T dp that the axis needs, formed
-     * as mk_pair_of_poses_ forms them, so the answer is mk_sat_box_box's. */
+    /* The row or column of R = ra^T rb the axis needs, as mk_pair_of_poses_
+     * forms it, and B's offset along the axis in world space. */
     if (kind == MK_SAT_FACE_A) {
-        mk_vec3 e = k == 0 ? ra->c0 : k == 1 ? ra->c1 : ra->c2;
-        return face_apart(ha, hb, kind, k, mk_v3(mk_v3_dot(e, rb->c0), mk_v3_dot(e, rb->c1), mk_v3_dot(e, rb->c2)), mk_v3_dot(e, dp),
+        const mk_vec3 *e = column(ra, k);
+        return face_apart(ha, hb, kind, k, mk_v3(mk_v3_dot(*e, rb->c0), mk_v3_dot(*e, rb->c1), mk_v3_dot(*e, rb->c2)), mk_v3_dot(*e, dp),
                           stop, out);
     }
-    {
-        mk_vec3 e = k == 0 ? rb->c0 : k == 1 ? rb->c1 : rb->c2;
-        u = mk_mat3_tmul_v3(*ra, e);
-        return face_apart(ha, hb, kind, k, u, mk_v3_dot(u, mk_mat3_tmul_v3(*ra, dp)), stop, out);
-    }
+    u = mk_mat3_tmul_v3(*ra, *column(rb, k));
+    return face_apart(ha, hb, kind, k, u, mk_v3_dot(*column(rb, k), dp), stop, out);
 }
 
 /* A face axis named by opt->first, straight from R before anything is set
@@ -665,10 +718,10 @@ static int box_hint_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, c
     if (opt->first == MK_SAT_FACE_A) {
         /* Row k of R: B's axes' components along A's axis k. */
         u = k == 0 ? mk_v3(R->c0.x, R->c1.x, R->c2.x) : k == 1 ? mk_v3(R->c0.y, R->c1.y, R->c2.y) : mk_v3(R->c0.z, R->c1.z, R->c2.z);
-        return face_apart(ha, hb, opt->first, k, u, k == 0 ? t.x : k == 1 ? t.y : t.z, opt->stop_above, out);
+        return face_apart(&ha, &hb, opt->first, k, u, k == 0 ? t.x : k == 1 ? t.y : t.z, opt->stop_above, out);
     }
     u = k == 0 ? R->c0 : k == 1 ? R->c1 : R->c2;
-    return face_apart(ha, hb, opt->first, k, u, mk_v3_dot(u, t), opt->stop_above, out);
+    return face_apart(&ha, &hb, opt->first, k, u, mk_v3_dot(u, t), opt->stop_above, out);
 }
 
 /* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
@@ -679,8 +732,8 @@ static int box_hint_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, c
 void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
 {
     sat_ctx c;
-    mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3], L[3], Lb[3], l;
-    int i, j, k;
+    mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3];
+    int i, j;
     if (opt->first != MK_SAT_NONE && box_hint_apart(ha, hb, R, t, opt, out)) return;
     r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
     r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
@@ -751,17 +804,6 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
         out->separation = c.face_b.sep;
         out->normal = mk_v3(sj * r[0][j], sj * r[1][j], sj * r[2][j]);
     } else {
-        /* L = e_i x R_j pointing from A to B; A's supporting edge sits at the
-         * corner with the signs of L, B's at the corner with those of -R^T L. */
-        i = c.edges.a;
-        j = c.edges.b;
-        L[i] = 0, L[(i + 1) % 3] = -r[(i + 2) % 3][j], L[(i + 2) % 3] = r[(i + 1) % 3][j];
-        if (L[0] * d[0] + L[1] * d[1] + L[2] * d[2] < 0) L[0] = -L[0], L[1] = -L[1], L[2] = -L[2];
-        for (k = 0; k < 3; ++k) Lb[k] = -(r[0][k] * L[0] + r[1][k] * L[1] + r[2][k] * L[2]);
-        l = mk_sqrt_(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
-        out->a = box_half_edge[box_edge(i, L)];
-        out->b = box_half_edge[box_edge(j, Lb)];
-        out->separation = c.edges.sep;
-        out->normal = mk_v3(L[0] / l, L[1] / l, L[2] / l);
+        edge_result(r, d, c.edges.a, c.edges.b, c.edges.sep, out);
     }
 }

@@ -97,13 +97,14 @@ void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, con
  * (edges as the lower half-edge of the box view). */
 void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out);
 
-/* The first test of mk_sat_box_box with a face axis hint (kind FACE_A or
- * FACE_B, face index `face` of that box), from the two world poses (rotations
- * ra, rb, positions pa, pb) before any relative pose is built: only the row
- * or column of R and the offset the axis needs. Returns 1 with *out as
- * mk_sat_box_box with that hint reports it (bit for bit) when the boxes
- * separate along it by more than stop; else 0 (*out untouched). */
-int mk_sat_box_box_face_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 pa, mk_vec3 pb,
-                              mk_sat_kind kind, int face, mk_real stop, mk_sat_result *out);
+/* The first test of mk_sat_box_box with a hint (opt->first = kind, first_a
+ * = ia, first_b = ib) for boxes of half-extents ha and hb, from their two
+ * world poses before any relative pose is built: only the entries of
+ * R and t the axis needs (B's offset along a face axis of B taken in world
+ * space). Returns 1 with *out as mk_sat_box_box with that hint reports it
+ * (to rounding; bit for bit for an axis of A or an edge pair) when the
+ * boxes separate along it by more than stop; else 0 (*out untouched). */
+int mk_sat_box_box_hint_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_pose *xa, const mk_pose *xb, mk_sat_kind kind, int ia, int ib,
+                              mk_real stop, mk_sat_result *out);
 
 #endif

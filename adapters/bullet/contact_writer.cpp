@@ -85,13 +85,14 @@ bool same_key(const btManifoldPoint &a, const btManifoldPoint &b)
 
 }  // namespace
 
-void write_contacts(btManifoldResult *result, const PairContact *points, int count, bool owned)
+void write_contacts(btManifoldResult *result, const PairContact *points, int count, bool by_features)
 {
     btPersistentManifold *m = result->getPersistentManifold();
     const btCollisionObjectWrapper *w0 = result->getBody0Wrap(), *w1 = result->getBody1Wrap();
     if (count > MANIFOLD_CACHE_SIZE) count = MANIFOLD_CACHE_SIZE;
-    if (!owned || w0->m_partId != -1 || w1->m_partId != -1) {
-        // Shared manifold or part ids taken: leave matching to Bullet.
+    if (!by_features || w0->m_partId != -1 || w1->m_partId != -1) {
+        // Shared manifold, matching by position asked, or part ids taken:
+        // leave matching to Bullet.
         for (int i = 0; i < count; i++)
             result->addContactPoint(points[i].normal_on_b, points[i].point_on_b, points[i].distance);
         return;

@@ -43,8 +43,10 @@ struct PairContact {
 };
 
 // At most MANIFOLD_CACHE_SIZE (4) points; extra points are ignored.
-// `owned`: the manifold belongs to this pair alone.
-void write_contacts(btManifoldResult *result, const PairContact *points, int count, bool owned = true);
+// `by_features`: match by the feature keys (the manifold belongs to this
+// pair alone); false leaves matching to Bullet's addContactPoint (a shared
+// manifold, or a pair better served by Bullet's matching by position).
+void write_contacts(btManifoldResult *result, const PairContact *points, int count, bool by_features = true);
 
 }  // namespace mkb
 

@@ -161,7 +161,10 @@ private:
 // btBoxBoxDetector does), runs mk_collide in MK_MANIFOLD_BEST_FACE mode (the
 // minimum-penetration face every frame, as Bullet's own algorithms report)
 // and matches
-// points to the cached ones by Minko feature ID, so m_appliedImpulse follows
+// points to the cached ones by Minko feature ID (two hulls with polyhedral
+// features: through Bullet's addContactPoint, by position, as Bullet's own
+// hull-hull algorithm does; measured better on the convex stack), so
+// m_appliedImpulse follows
 // its contact (a point whose features changed in place is matched by
 // position, as Bullet matches; points not reported stay until Bullet's
 // refreshContactPoints drops them: contact_writer.h). Hull shapes are converted once per shape and
@@ -197,6 +200,18 @@ public:
     }
     // Whether mk_collide handles this pair of mapped shapes in this build.
     static bool minko_handles(const ShapeMap &a, const ShapeMap &b);
+    // The checked world poses of a pair's two mapped shapes (minko_pose),
+    // each made once per collision object and transform and shared by all
+    // the object's pairs: a per-object cache indexed by the object's world
+    // array index, kept while the object, its world transform and the
+    // shape's axis rotation stay the same (compared on every call, so a body
+    // moved by the user between steps is seen at once). A compound's child
+    // (its own transform), an object outside a world, and pairs dispatched
+    // concurrently (btCollisionDispatcherMt: btThreadsAreRunning()) get
+    // fresh poses in `scratch`. *pa and *pb are valid until the next call.
+    // Memory: one entry per world array index seen.
+    mk_status world_poses(const btCollisionObjectWrapper *wa, const ShapeMap &ma, const btCollisionObjectWrapper *wb,
+                          const ShapeMap &mb, mk_pose scratch[2], const mk_pose **pa, const mk_pose **pb);
 
     struct Stats {
         std::atomic<long> minko_algorithms{0};  // pair algorithms created on Minko
@@ -211,8 +226,17 @@ private:
         mk_hull *hull;
         unsigned long long fingerprint;
     };
+    struct PoseEntry {
+        const btCollisionObject *object;  // nullptr: never made
+        btScalar from[12];                // the world transform it was made from: origin, then basis rows
+        mk_quat axis;
+        mk_status status;
+        mk_pose pose;
+    };
+    const mk_pose *cached_pose(const btCollisionObjectWrapper *w, const ShapeMap &map, mk_pose *scratch, mk_status *st);
     Backend m_backend;
     CreateFunc *m_create;
+    btAlignedObjectArray<PoseEntry> m_poses;  // by btCollisionObject::getWorldArrayIndex()
     mutable std::mutex m_hull_lock;
     std::unordered_map<const btCollisionShape *, HullEntry> m_hulls;
     // Hulls replaced because their shape changed (or its address was reused):

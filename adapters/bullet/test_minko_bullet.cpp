@@ -1339,6 +1339,81 @@ START_TEST(np_shape_changes_seen)
 }
 END_TEST
 
+// The deepest point of the manifold between objects a and b (+inf if none).
+btScalar pair_distance(btDispatcher *d, const btCollisionObject *a, const btCollisionObject *b)
+{
+    btScalar best = std::numeric_limits<btScalar>::infinity();
+    for (int i = 0; i < d->getNumManifolds(); i++) {
+        const btPersistentManifold *m = d->getManifoldByIndexInternal(i);
+        if (!((m->getBody0() == a && m->getBody1() == b) || (m->getBody0() == b && m->getBody1() == a))) continue;
+        for (int j = 0; j < m->getNumContacts(); j++) best = std::min(best, m->getContactPoint(j).getDistance());
+    }
+    return best;
+}
+
+// Each pair sees its objects' current world poses (the configuration keeps
+// one pose per object): an object moved by the user between two collision
+// passes, a compound's child (its own transform, not the object's), and two
+// worlds sharing one configuration (the same world array indices for
+// different objects). Box-on-slab depths are exact: d = 0.5 + 0.5 - y.
+START_TEST(np_world_poses_follow_the_objects)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config), dispatcher2(&config);
+    btDbvtBroadphase bp, bp2;
+    btCollisionWorld world(&dispatcher, &bp, &config), world2(&dispatcher2, &bp2, &config);
+    btBoxShape slab(btVector3(20, btScalar(0.5), 20)), cube(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)));
+    btCompoundShape compound;
+    compound.addChildShape(btTransform(btQuaternion::getIdentity(), btVector3(0, btScalar(-0.5), 0)), &cube);
+    btCollisionObject ground, box, comp, ground2, box2;
+    ground.setCollisionShape(&slab);
+    box.setCollisionShape(&cube);
+    comp.setCollisionShape(&compound);
+    ground2.setCollisionShape(&slab);
+    box2.setCollisionShape(&cube);
+    const btQuaternion id = btQuaternion::getIdentity();
+    box.setWorldTransform(btTransform(id, btVector3(0, btScalar(0.98), 0)));        // d = 0.02
+    comp.setWorldTransform(btTransform(id, btVector3(5, btScalar(1.47), 0)));       // child at 0.97: d = 0.03
+    box2.setWorldTransform(btTransform(id, btVector3(-3, btScalar(0.95), 2)));      // d = 0.05
+    ground2.setWorldTransform(btTransform(id, btVector3(0, 0, 0)));
+    world.addCollisionObject(&ground);
+    world.addCollisionObject(&box);
+    world.addCollisionObject(&comp);
+    world2.addCollisionObject(&box2);  // index 0 in world2, the ground's index in world
+    world2.addCollisionObject(&ground2);
+    // A row of resting cubes: many entries, first seen in index order.
+    std::vector<btCollisionObject> row(40);
+    for (size_t k = 0; k < row.size(); k++) {
+        row[k].setCollisionShape(&cube);
+        row[k].setWorldTransform(btTransform(id, btVector3(btScalar(-15 + 0.75 * (double)k), btScalar(0.99), -5)));  // d = 0.01
+        world.addCollisionObject(&row[k]);
+    }
+    const double tol = 1e3 * std::numeric_limits<btScalar>::epsilon();
+    // Passes 0-2: the first world alone; pass 3: the second world, whose
+    // objects take the first world's entries; pass 4: the first world again.
+    for (int pass = 0; pass < 5; pass++) {
+        if (pass == 3) {
+            world2.performDiscreteCollisionDetection();
+            MK_ASSERT_NEAR(pair_distance(&dispatcher2, &ground2, &box2), -0.05, tol);
+            continue;
+        }
+        world.performDiscreteCollisionDetection();
+        const double d = pass == 1 ? 0.12 : 0.02;  // pass 1: the box moved 0.1 down since pass 0
+        MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &box), -d, tol);
+        MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &comp), -0.03, tol);
+        for (const btCollisionObject &o : row) MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &o), -0.01, tol);
+        box.setWorldTransform(btTransform(id, btVector3(0, btScalar(pass == 0 ? 0.88 : 0.98), 0)));
+    }
+    ck_assert_int_eq(config.stats.collide_errors.load(), 0);
+    for (btCollisionObject &o : row) world.removeCollisionObject(&o);
+    world.removeCollisionObject(&comp);
+    world.removeCollisionObject(&box);
+    world.removeCollisionObject(&ground);
+    world2.removeCollisionObject(&ground2);
+    world2.removeCollisionObject(&box2);
+}
+END_TEST
+
 std::vector<btManifoldPoint> g_written;  // points written this frame (gContactAddedCallback)
 bool record_written(btManifoldPoint &p, const btCollisionObjectWrapper *, int, int, const btCollisionObjectWrapper *, int, int)
 {
@@ -1610,6 +1685,7 @@ Suite *suite()
     tcase_add_test(n, np_near_pairs_never_skipped);
     tcase_add_test(n, np_world_rests_on_minko_contacts);
     tcase_add_test(n, np_shape_changes_seen);
+    tcase_add_test(n, np_world_poses_follow_the_objects);
     tcase_add_test(n, np_warm_pairs_take_the_best_face);
     tcase_add_test(n, np_switch_at_run_time);
     suite_add_tcase(s, n);

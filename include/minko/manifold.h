@@ -57,12 +57,16 @@
  * that need them. Box and hull pairs whose bounding balls are farther apart
  * than the margin return before anything else. Complexity per call: O(1)
  * for the closed forms and for two boxes (15 axes, a 4-by-4 face clip in
- * the reference box's frame, the clipped points reduced there; on
- * demos/bench_contacts --quick's cases, under callgrind, about 2.8k
- * instructions cold and 3.7k warm for tilted stacked boxes (3.4k warm
- * through mk_collide_pose), 2.7k / 2.9k (2.7k) for random overlaps,
- * 1.1k / 0.94k (0.72k) for separated boxes whose bounding boxes overlap;
- * a fifth of it SAT); for hulls SAT's O(F_A S_B + F_B S_A +
+ * the reference box's frame, the clipped points reduced there; a pair
+ * apart along last frame's separating axis tests that one axis from the
+ * world poses and stops; on demos/bench_contacts --quick's cases, under
+ * callgrind, steady state (--loops 5 less --loops 1), mk_collide_pose:
+ * about 3.5k instructions warm for tilted stacked boxes (2.7k cold through
+ * mk_collide, where the exact axis is often an edge pair: one point),
+ * 2.7k for random overlaps, 0.3k for separated boxes whose bounding boxes
+ * overlap; of a stacked face contact about 0.7k SAT, 1.5k the clip, 0.3k
+ * the reduction of 8 points to 4, 0.6k the pose and the move to world);
+ * for hulls SAT's O(F_A S_B + F_B S_A +
  * E_A E_B) (src/sat.h) plus O(n + m) clipping of faces with n and m (at most
  * 32) vertices; GJK/EPA pairs are bounded by their iteration caps.
  *
