@@ -18,8 +18,16 @@
  * test on the AABBs decides. Boxes infinite on the row axis (ground planes)
  * do not fit a row: they are tested against every box, O(n) each.
  *
- * Cost: O(n) keys, one radix sort of n keys (a few byte passes), and for
- * each box the boxes of its three rows that overlap it on the sweep axis. */
+ * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
+ * quantisation, rows; made with headroom) and start from the last sweep's
+ * order, so a coherent scene needs an insertion sort, O(n), instead of the
+ * radix sort; a plan is remade when it is old, when boxes crowd the ends
+ * of its ranges, or when a box is taller than its rows (the one thing that
+ * would make it wrong).
+ *
+ * Cost: O(n) keys, one insertion sort bounded to 4 moves per box or one
+ * radix sort of n keys (a few byte passes), and for each box the boxes of
+ * its three rows that overlap it on the sweep axis. */
 #include <math.h>
 #include <string.h>
 
@@ -40,17 +48,23 @@ typedef struct frame_ {
 
 struct mk_sweep {
     uint64_t *key, *tmp;  /* sort keys: row << 40 | q(lo) << 24 | slot */
-    uint32_t *qhi;        /* per sorted box: q(hi) on the sweep axis */
+    uint32_t *qlo, *qhi;  /* per sorted box: q(lo), q(hi) on the sweep axis (the inner loops' reads) */
+    uint32_t *slot;       /* per sorted box: its slot */
     mk_aabb *box;         /* per sorted box: its AABB (sequential reads in the sweep) */
     uint32_t *big;        /* slots of boxes infinite on the row axis */
     int cap;
     frame_ f;             /* of the last sweep, with its n sorted and nbig big boxes: */
     int n, nbig;          /* region queries after a stateless update read them */
+    int kept;             /* f and key[0, n) may seed the next sweep (see sort_keys) */
+    int age;              /* sweeps since f was planned */
+    int crowded;          /* the last sweep clamped many boxes to the ends of f's ranges */
+    int sort_wait;        /* sweeps left before an insertion sort is tried again */
+    int sort_backoff;     /* the next wait, doubled each time one gives up */
 };
 
 static size_t sweep_bytes_per_proxy(void)
 {
-    return 2 * sizeof(uint64_t) + sizeof(uint32_t) + sizeof(mk_aabb) + sizeof(uint32_t);
+    return 2 * sizeof(uint64_t) + 4 * sizeof(uint32_t) + sizeof(mk_aabb);
 }
 
 static mk_status sweep_create(mk_bp *bp)
@@ -67,9 +81,12 @@ static mk_status sweep_create(mk_bp *bp)
     w->box = (mk_aabb *)p; p += n * sizeof(mk_aabb);
     w->key = (uint64_t *)p; p += n * sizeof(uint64_t);
     w->tmp = (uint64_t *)p; p += n * sizeof(uint64_t);
+    w->qlo = (uint32_t *)p; p += n * sizeof(uint32_t);
     w->qhi = (uint32_t *)p; p += n * sizeof(uint32_t);
+    w->slot = (uint32_t *)p; p += n * sizeof(uint32_t);
     w->big = (uint32_t *)p;
     w->cap = bp->cap;
+    w->n = w->nbig = w->kept = w->age = w->crowded = w->sort_wait = w->sort_backoff = 0;
     bp->sweep = w;
     return MK_OK;
 }
@@ -100,6 +117,8 @@ static uint32_t quantise(const frame_ *f, double x)
     return t >= (double)MK_SWEEP_Q_MAX_ ? MK_SWEEP_Q_MAX_ : (uint32_t)t;
 }
 
+/* Rows beyond either end merge into the end row: slower, never wrong (a
+ * box starts at most H below any box it overlaps, whatever row it is in). */
 static uint32_t row_of(const frame_ *f, double y)
 {
     double t = (y - f->y0) * f->inv_h;
@@ -149,6 +168,17 @@ static double largest_extent(const mk_bp *bp, int axis)
     return m;
 }
 
+/* Ranges get a quarter of their width as headroom on each side, so that a
+ * plan kept across sweeps (sort_keys) still spreads boxes that drift out
+ * of the range it was made for (ODE's heap spreads over the plane). */
+static void widen(double *lo, double *hi)
+{
+    double m = 0.25 * (*hi - *lo);
+    if (!(m <= 1e300)) return; /* empty or overflowing: used as it is */
+    *lo -= m;
+    *hi += m;
+}
+
 static void plan(const mk_bp *bp, frame_ *f)
 {
     spread_ p;
@@ -162,6 +192,8 @@ static void plan(const mk_bp *bp, frame_ *f)
     for (k = 0; k < 3; ++k) if (k != f->ax && var[k] > var[f->ay]) f->ay = k;
     xlo = p.lo[f->ax]; xhi = p.hi[f->ax];
     ylo = p.lo[f->ay]; yhi = p.hi[f->ay];
+    widen(&xlo, &xhi);
+    widen(&ylo, &yhi);
     hmax = largest_extent(bp, f->ay);
     f->x0 = xlo <= xhi ? xlo : 0;
     f->xscale = xhi > xlo ? (double)(MK_SWEEP_Q_MAX_ - 1) / (xhi - xlo) : 0;
@@ -170,8 +202,8 @@ static void plan(const mk_bp *bp, frame_ *f)
      * double, so two rows apart must stay provably farther than any box.
      * At most MK_SWEEP_ROWS_ rows; rows beyond it merge into the last. */
     hmax *= 1.0 + 1.0 / 1024;
-    if (hmax < (yhi - ylo) / (MK_SWEEP_ROWS_ - 1)) hmax = (yhi - ylo) / (MK_SWEEP_ROWS_ - 1);
-    f->y0 = ylo <= yhi ? ylo : 0;
+    if (hmax < (yhi - ylo) / (MK_SWEEP_ROWS_ - 2)) hmax = (yhi - ylo) / (MK_SWEEP_ROWS_ - 2);
+    f->y0 = ylo <= yhi ? ylo - hmax : 0; /* row 0 is left to boxes below the range */
     f->h = hmax;
     f->inv_h = hmax > 0 ? 1.0 / hmax : 0;
     if (!(f->inv_h <= 1e300)) f->inv_h = 0; /* a subnormal height: one row */
@@ -185,15 +217,12 @@ typedef struct sweep_ctx_ {
     report_fn report;
 } sweep_ctx_;
 
-static uint32_t slot_at(const struct mk_sweep *w, int i) { return (uint32_t)(w->key[i] & 0xFFFFFFu); }
-static uint32_t qlo_at(const struct mk_sweep *w, int i) { return (uint32_t)(w->key[i] >> 24) & MK_SWEEP_Q_MAX_; }
-
 static inline mk_status test(const sweep_ctx_ *c, int i, int j)
 {
     uint32_t a, b;
     if (!mk_bp_overlap_(&c->w->box[i], &c->w->box[j])) return MK_OK;
-    a = slot_at(c->w, i);
-    b = slot_at(c->w, j);
+    a = c->w->slot[i];
+    b = c->w->slot[j];
     if (mk_bp_both_static_(c->bp, a, b)) return MK_OK;
     return c->report(c->bp, a, b);
 }
@@ -201,11 +230,12 @@ static inline mk_status test(const sweep_ctx_ *c, int i, int j)
 /* Pairs inside one row [s, e). */
 static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
 {
+    const uint32_t *qlo = c->w->qlo;
     int i, j;
     mk_status st;
     for (i = s; i < e; ++i) {
         uint32_t hi = c->w->qhi[i];
-        for (j = i + 1; j < e && qlo_at(c->w, j) <= hi; ++j)
+        for (j = i + 1; j < e && qlo[j] <= hi; ++j)
             if ((st = test(c, i, j)) != MK_OK) return st;
     }
     return MK_OK;
@@ -216,18 +246,16 @@ static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
  * before it ends. */
 static mk_status sweep_rows(const sweep_ctx_ *c, int s, int e, int t, int u)
 {
-    const struct mk_sweep *w = c->w;
+    const uint32_t *qlo = c->w->qlo, *qhi = c->w->qhi;
     mk_status st;
     int j;
     while (s < e && t < u) {
-        if (qlo_at(w, s) <= qlo_at(w, t)) {
-            uint32_t hi = w->qhi[s];
-            for (j = t; j < u && qlo_at(w, j) <= hi; ++j)
+        if (qlo[s] <= qlo[t]) {
+            for (j = t; j < u && qlo[j] <= qhi[s]; ++j)
                 if ((st = test(c, s, j)) != MK_OK) return st;
             ++s;
         } else {
-            uint32_t hi = w->qhi[t];
-            for (j = s; j < e && qlo_at(w, j) <= hi; ++j)
+            for (j = s; j < e && qlo[j] <= qhi[t]; ++j)
                 if ((st = test(c, j, t)) != MK_OK) return st;
             ++t;
         }
@@ -245,7 +273,7 @@ static mk_status sweep_big(const sweep_ctx_ *c, int n, int nbig)
         uint32_t a = c->w->big[i];
         const mk_aabb *ba = &bp->box[a];
         for (j = 0; j < n; ++j) {
-            uint32_t b = slot_at(c->w, j);
+            uint32_t b = c->w->slot[j];
             if (!mk_bp_overlap_(ba, &c->w->box[j]) || mk_bp_both_static_(bp, a, b)) continue;
             if ((st = c->report(bp, a, b)) != MK_OK) return st;
         }
@@ -258,23 +286,143 @@ static mk_status sweep_big(const sweep_ctx_ *c, int n, int nbig)
     return MK_OK;
 }
 
-/* Keys of the boxes that fit a row, sorted; the big ones listed apart. */
-static int sort_keys(mk_bp *bp, const frame_ *f, int *nbig)
+/* ---- keys ---- */
+
+static int is_big(const frame_ *f, const mk_aabb *b) { return !(hi_of(b, f->ay) - lo_of(b, f->ay) <= MK_REAL_MAX); }
+
+/* What one sort of keys learnt about the plan it used. */
+typedef struct keying_ {
+    int clamped;  /* boxes past either end of the plan's ranges */
+    int tall;     /* a box taller than the rows: the plan is wrong, not just slow */
+} keying_;
+
+/* Row 0 and the last row, q = 0 and the largest q are where boxes beyond
+ * the plan's ranges land (the plan's headroom keeps the others off them). */
+static inline uint64_t key_of(const frame_ *f, const mk_aabb *b, uint32_t slot, keying_ *k)
+{
+    double ylo = lo_of(b, f->ay);
+    uint32_t row = row_of(f, ylo), q = quantise(f, lo_of(b, f->ax));
+    k->clamped += (row - 1u >= MK_SWEEP_ROWS_ - 1u) | (q - 1u >= MK_SWEEP_Q_MAX_ - 1u);
+    k->tall |= !((hi_of(b, f->ay) - ylo) * (1.0 + 1.0 / 1024) <= f->h);
+    return (uint64_t)row << 40 | (uint64_t)q << 24 | slot;
+}
+
+/* Every box in the structure, in slot order: keys, and the big ones apart. */
+static int keys_by_slot(mk_bp *bp, const frame_ *f, int *nbig, keying_ *k)
 {
     struct mk_sweep *w = bp->sweep;
-    int n = 0, i;
+    int n = 0;
     uint32_t s;
     *nbig = 0;
     for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
         const mk_aabb *b = &bp->box[s];
         if (!in_structure(bp, s)) continue;
-        if (!(hi_of(b, f->ay) - lo_of(b, f->ay) <= MK_REAL_MAX)) { w->big[(*nbig)++] = s; continue; }
-        w->key[n++] = (uint64_t)row_of(f, lo_of(b, f->ay)) << 40 | (uint64_t)quantise(f, lo_of(b, f->ax)) << 24 | s;
+        if (is_big(f, b)) w->big[(*nbig)++] = s;
+        else w->key[n++] = key_of(f, b, s, k);
     }
-    mk_sort_u64_by_(w->key, w->tmp, n, 3); /* the slot is payload: slot order breaks ties */
+    return n;
+}
+
+/* The same keys in the order of the last sweep (key[0, w->n) and the big
+ * list of the last sweep): with a coherent scene and the same plan they
+ * come out nearly sorted. The last sweep's boxes are the ones in the
+ * structure now but for the proxies created or destroyed since (flags
+ * NEW and DYING of the dirty list); the new ones go last, after any that
+ * stopped being big. tmp holds them meanwhile. */
+static int keys_in_last_order(mk_bp *bp, const frame_ *f, int *nbig, keying_ *k)
+{
+    struct mk_sweep *w = bp->sweep;
+    int n = 0, extra = 0, i, nb = 0;
+    for (i = 0; i < w->nbig; ++i) {
+        uint32_t s = w->big[i];
+        if (!in_structure(bp, s)) continue;
+        if (is_big(f, &bp->box[s])) w->big[nb++] = s;
+        else w->tmp[extra++] = key_of(f, &bp->box[s], s, k);
+    }
+    for (i = 0; i < bp->dirty_count; ++i) {
+        uint32_t s = bp->dirty[i];
+        if (!(bp->flags[s] & MK_PF_NEW) || !in_structure(bp, s)) continue;
+        if (is_big(f, &bp->box[s])) w->big[nb++] = s;
+        else w->tmp[extra++] = key_of(f, &bp->box[s], s, k);
+    }
+    for (i = 0; i < w->n; ++i) {
+        uint32_t s = (uint32_t)(w->key[i] & 0xFFFFFFu);
+        if (!in_structure(bp, s)) continue;
+        if (is_big(f, &bp->box[s])) w->big[nb++] = s;
+        else w->key[n++] = key_of(f, &bp->box[s], s, k);
+    }
+    for (i = 0; i < extra; ++i) w->key[n++] = w->tmp[i];
+    *nbig = nb;
+    return n;
+}
+
+/* Insertion sort that gives up once it has moved keys `budget` places
+ * (the keys are then still all there, in some order): O(n + inversions). */
+static int insertion_sort(uint64_t *key, int n, long budget)
+{
+    int i, j;
+    for (i = 1; i < n; ++i) {
+        uint64_t v = key[i];
+        if (key[i - 1] <= v) continue;
+        for (j = i; j > 0 && key[j - 1] > v; --j) key[j] = key[j - 1];
+        key[j] = v;
+        if ((budget -= i - j) < 0) return 0;
+    }
+    return 1;
+}
+
+/* Plans older than this are remade: the axis of largest spread may have changed. */
+#define MK_SWEEP_PLAN_AGE_ 64
+/* Longest wait between insertion sorts that gave up (boxes changing rows
+ * every frame, as in ODE's exploding heap, make the order incoherent). */
+#define MK_SWEEP_MAX_SORT_WAIT_ 32
+
+/* After an insertion sort gave up, the next ones wait (doubling waits). */
+static void insertion_gave_up(struct mk_sweep *w)
+{
+    w->sort_backoff = w->sort_backoff ? 2 * w->sort_backoff : 1;
+    if (w->sort_backoff > MK_SWEEP_MAX_SORT_WAIT_) w->sort_backoff = MK_SWEEP_MAX_SORT_WAIT_;
+    w->sort_wait = w->sort_backoff;
+}
+
+/* Sorted keys of the boxes that fit a row, the big ones listed apart, and
+ * the per-box arrays the sweep reads. A stateless sweep right after
+ * another one (`reuse`) keeps its plan, unless it is old or boxes crowded
+ * the ends of its ranges, and starts from its order: an insertion sort,
+ * O(n) on a coherent scene, with a radix sort past 4 moves per box (and
+ * for a while after one gave up). Any
+ * plan is correct as long as no box is taller than its rows; one that
+ * meets such a box is remade. */
+static int sort_keys(mk_bp *bp, int reuse, int *nbig)
+{
+    struct mk_sweep *w = bp->sweep;
+    frame_ *f = &w->f;
+    keying_ k = {0, 0};
+    int n = 0, i, sorted = 0, keep = reuse && w->kept && !w->crowded && w->age < MK_SWEEP_PLAN_AGE_;
+    if (keep && w->sort_wait == 0) {
+        n = keys_in_last_order(bp, f, nbig, &k);
+        if (!k.tall && !(sorted = insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
+        if (sorted) w->sort_backoff = 0;
+    } else if (keep) { /* the plan without the order: keys in slot order, sequential reads */
+        w->sort_wait--;
+        n = keys_by_slot(bp, f, nbig, &k);
+    }
+    if (!keep || k.tall) {
+        plan(bp, f);
+        k.clamped = 0;
+        k.tall = 0;
+        n = keys_by_slot(bp, f, nbig, &k);
+        w->age = 0;
+    }
+    w->age++;
+    if (!sorted) mk_sort_u64_by_(w->key, w->tmp, n, 3); /* the slot is payload: input order breaks ties */
+    w->crowded = k.clamped > n / 16 + 16;
     for (i = 0; i < n; ++i) {
-        const mk_aabb *b = &bp->box[slot_at(w, i)];
+        uint32_t s = (uint32_t)(w->key[i] & 0xFFFFFFu);
+        const mk_aabb *b = &bp->box[s];
         w->box[i] = *b;
+        w->slot[i] = s;
+        w->qlo[i] = (uint32_t)(w->key[i] >> 24) & MK_SWEEP_Q_MAX_;
         w->qhi[i] = quantise(f, hi_of(b, f->ax));
     }
     return n;
@@ -282,27 +430,30 @@ static int sort_keys(mk_bp *bp, const frame_ *f, int *nbig)
 
 mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b))
 {
-    frame_ f;
+    struct mk_sweep *w;
     sweep_ctx_ c;
     int n, nbig, s, e;
     mk_status st;
     if (!bp->sweep && (st = sweep_create(bp)) != MK_OK) return st;
-    plan(bp, &f);
-    n = sort_keys(bp, &f, &nbig);
-    bp->sweep->f = f;
-    bp->sweep->n = n;
-    bp->sweep->nbig = nbig;
-    c.bp = bp; c.w = bp->sweep; c.report = report;
+    w = bp->sweep;
+    /* The arrays describe the last sweep only if the last update was one. */
+    n = sort_keys(bp, bp->swept, &nbig);
+    w->n = n;
+    w->nbig = nbig;
+    w->kept = 0;
+    c.bp = bp; c.w = w; c.report = report;
     for (s = 0; s < n; s = e) {
-        uint64_t row = c.w->key[s] >> 40;
+        uint64_t row = w->key[s] >> 40;
         int u;
-        for (e = s + 1; e < n && c.w->key[e] >> 40 == row; ++e) {}
+        for (e = s + 1; e < n && w->key[e] >> 40 == row; ++e) {}
         if ((st = sweep_row(&c, s, e)) != MK_OK) return st;
-        if (e == n || c.w->key[e] >> 40 != row + 1) continue;
-        for (u = e + 1; u < n && c.w->key[u] >> 40 == row + 1; ++u) {}
+        if (e == n || w->key[e] >> 40 != row + 1) continue;
+        for (u = e + 1; u < n && w->key[u] >> 40 == row + 1; ++u) {}
         if ((st = sweep_rows(&c, s, e, e, u)) != MK_OK) return st;
     }
-    return sweep_big(&c, n, nbig);
+    if ((st = sweep_big(&c, n, nbig)) != MK_OK) return st;
+    w->kept = 1;
+    return MK_OK;
 }
 
 /* First index in [i, e) whose quantised lower end is above q (or, with
@@ -311,7 +462,7 @@ static int first_above(const struct mk_sweep *w, int i, int e, uint32_t q, int s
 {
     while (i < e) {
         int mid = i + (e - i) / 2;
-        uint32_t v = qlo_at(w, mid);
+        uint32_t v = w->qlo[mid];
         if (strict ? v <= q : v < q) i = mid + 1;
         else e = mid;
     }
@@ -324,26 +475,25 @@ static int first_above(const struct mk_sweep *w, int i, int e, uint32_t q, int s
  * that start inside it, and vice versa). O(n log n), no pair is touched. */
 mk_status mk_sweep_count_(mk_bp *bp, double *tests)
 {
-    frame_ f;
     struct mk_sweep *w;
     int n, nbig, s, e, u, i;
     double t = 0;
     mk_status st;
     if (!bp->sweep && (st = sweep_create(bp)) != MK_OK) return st;
     w = bp->sweep;
-    plan(bp, &f);
-    n = sort_keys(bp, &f, &nbig);
+    n = sort_keys(bp, 0, &nbig);
     w->n = 0; /* the arrays no longer describe a finished sweep */
     w->nbig = 0;
+    w->kept = 0;
     for (s = 0; s < n; s = e) {
         uint64_t row = w->key[s] >> 40;
         for (e = s + 1; e < n && w->key[e] >> 40 == row; ++e) {}
         for (u = e; u < n && w->key[u] >> 40 == row + 1; ++u) {}
         for (i = s; i < e; ++i) {
             t += first_above(w, i + 1, e, w->qhi[i], 1) - (i + 1);
-            if (u > e) t += first_above(w, e, u, w->qhi[i], 1) - first_above(w, e, u, qlo_at(w, i), 0);
+            if (u > e) t += first_above(w, e, u, w->qhi[i], 1) - first_above(w, e, u, w->qlo[i], 0);
         }
-        for (i = e; i < u; ++i) t += first_above(w, s, e, w->qhi[i], 1) - first_above(w, s, e, qlo_at(w, i), 1);
+        for (i = e; i < u; ++i) t += first_above(w, s, e, w->qhi[i], 1) - first_above(w, s, e, w->qlo[i], 1);
     }
     *tests = t + (double)nbig * n;
     return MK_OK;
@@ -373,8 +523,8 @@ void mk_sweep_query_(const mk_bp *bp, mk_aabb q, mk_bp_query_fn fn, void *ctx)
     int i = row_start(w, 0, row), j;
     while (i < w->n && w->key[i] >> 40 <= last) {
         row = w->key[i] >> 40;
-        for (; i < w->n && w->key[i] >> 40 == row && qlo_at(w, i) <= qx; ++i) {
-            uint32_t s = slot_at(w, i);
+        for (; i < w->n && w->key[i] >> 40 == row && w->qlo[i] <= qx; ++i) {
+            uint32_t s = w->slot[i];
             if (mk_bp_overlap_(&w->box[i], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
         }
         i = row_start(w, i, row + 1);

@@ -155,7 +155,9 @@ void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte);
 /* ---- stateless sort and sweep (bp_sweep.c) ---- */
 /* Reports every overlapping pair of live proxies (no static-static pair)
  * once, in no set order, from the boxes in box[]; allocates its scratch on
- * first use. O(n) + one radix sort + the boxes met in the sweep. */
+ * first use. O(n) + one sort + the boxes met in the sweep; right after an
+ * update answered by a sweep (bp->swept), the sort starts from that
+ * sweep's order (an insertion sort, O(n) on a coherent scene). */
 mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b));
 void mk_sweep_destroy_(mk_bp *bp);
 /* The AABB tests mk_sweep_pairs_ would make on the boxes in box[], counted

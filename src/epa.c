@@ -172,37 +172,64 @@ typedef struct epa_hole {
     unsigned char j[MK_EPA_MAX_FACES];
 } epa_hole;
 
-static const unsigned char next3[5] = {1, 2, 0, 1, 2};
+static const unsigned char next3[3] = {1, 2, 0};
 
-static void flood(epa_poly *P, epa_hole *H, int f, int e);
-
-/* Edge i of removed face f: floods on into the face across it if that face
- * sees w, else records the edge as the next silhouette edge. */
-static void cross_edge(epa_poly *P, epa_hole *H, int f, int i)
+static int sees(const epa_poly *P, int f, mk_vec3 w)
 {
-    int g = P->f[f].adj[i], j = P->f[f].edge[i];
-    if (!P->f[g].live) return;
-    if (mk_v3_dot(P->f[g].n, H->w) - P->f[g].dist > P->tol) {
-        flood(P, H, g, j);
-        return;
-    }
-    H->g[H->nh] = (short)g;
-    H->j[H->nh] = (unsigned char)j;
-    H->a[H->nh] = P->f[f].v[i];
-    H->b[H->nh++] = P->f[f].v[next3[i]];
+    return mk_v3_dot(P->f[f].n, w) - P->f[f].dist > P->tol;
 }
 
-/* Face f, which sees w, was entered across its edge e: removes it and walks
- * its other two edges in loop order, depth first, so the silhouette edges
- * come out in order around the hole (Bullet's EPA walks the same way): new
- * face k then meets new face k + 1 along (b_k, w), with no search. Depth is
- * at most the number of faces w sees. */
-static void flood(epa_poly *P, epa_hole *H, int f, int e)
+/* Removes every face that sees w, reachable from f0 (which does) by a depth
+ * first flood over the adjacency, and returns the number of silhouette
+ * edges (removed face to kept face); *sf, *si: one of them. */
+static int remove_visible(epa_poly *P, epa_hole *H, int f0, int *sf, int *si)
 {
-    P->f[f].live = 0;
-    H->removed[H->nr++] = (short)f;
-    cross_edge(P, H, f, next3[e]);
-    cross_edge(P, H, f, next3[e + 1]);
+    short stack[MK_EPA_MAX_FACES];
+    int sp = 0, edges = 0;
+    P->f[f0].live = 0;
+    H->removed[H->nr++] = (short)f0;
+    stack[sp++] = (short)f0;
+    while (sp > 0) {
+        int f = stack[--sp], i;
+        for (i = 0; i < 3; ++i) {
+            int g = P->f[f].adj[i];
+            if (!P->f[g].live) continue;
+            if (sees(P, g, H->w)) {
+                P->f[g].live = 0;
+                H->removed[H->nr++] = (short)g;
+                stack[sp++] = (short)g;
+            } else {
+                *sf = f;
+                *si = i;
+                edges++;
+            }
+        }
+    }
+    return edges;
+}
+
+/* The silhouette in order around the hole, walked from edge (f, i): after
+ * edge a -> b, turn about b through removed faces to the next edge that
+ * has a kept face across it. New face k over (a_k, b_k, w) then meets new
+ * face k + 1 along (b_k, w), with no search. Returns 0 unless the walk
+ * closes after every silhouette edge (a hole that is not a disc). */
+static int walk_silhouette(const epa_poly *P, epa_hole *H, int f, int i, int edges)
+{
+    int f0 = f, i0 = i;
+    do {
+        if (H->nh == edges) return 0;
+        H->g[H->nh] = P->f[f].adj[i];
+        H->j[H->nh] = P->f[f].edge[i];
+        H->a[H->nh] = P->f[f].v[i];
+        H->b[H->nh++] = P->f[f].v[next3[i]];
+        i = next3[i];
+        while (!P->f[P->f[f].adj[i]].live) {
+            int g = P->f[f].adj[i];
+            i = next3[P->f[f].edge[i]];
+            f = g;
+        }
+    } while (f != f0 || i != i0);
+    return H->nh == edges;
 }
 
 /* Face f over silhouette edge (a, b) and apex w, given d_a = a - w and
@@ -232,13 +259,11 @@ static int expand(epa_poly *P, int f0, int wi)
     epa_hole H;
     short nf_new[MK_EPA_MAX_FACES];
     mk_vec3 d0, da;
-    int k;
+    int k, edges, sf = 0, si = 0;
     H.w = P->v[wi].w;
     H.nr = H.nh = 0;
-    /* f0 is entered across no edge: its edges 0 and 1 by flood, then 2 */
-    flood(P, &H, f0, 2);
-    cross_edge(P, &H, f0, 2);
-    if (H.nh < 3) return 0;
+    edges = remove_visible(P, &H, f0, &sf, &si);
+    if (edges < 3 || !walk_silhouette(P, &H, sf, si, edges)) return 0;
     for (k = 0; k < H.nr; ++k) {
         P->f[H.removed[k]].dist = (mk_real)HUGE_VAL; /* out of nearest_face's way until reused */
         P->free_faces[P->nfree++] = H.removed[k];
@@ -247,7 +272,7 @@ static int expand(epa_poly *P, int f0, int wi)
     for (k = 0; k < H.nh; ++k) {
         int f = face_alloc(P), last = k + 1 == H.nh;
         mk_vec3 db = last ? d0 : mk_v3_sub(P->v[H.b[k]].w, H.w);
-        if (H.b[k] != H.a[last ? 0 : k + 1] || f < 0 || !fan_face(P, f, H.a[k], H.b[k], wi, da, db)) return 0;
+        if (f < 0 || !fan_face(P, f, H.a[k], H.b[k], wi, da, db)) return 0;
         link(P, f, 0, H.g[k], H.j[k]);
         nf_new[k] = (short)f;
         da = db;
@@ -356,7 +381,7 @@ MK_ALWAYS_INLINE int epa_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type 
         out->iterations = it + 1;
         if (P.nv == MK_EPA_MAX_VERTICES) break;
         w = support_from_face(p, ta, tb, climb_a, climb_b, &P, &best);
-        if (known_vertex(&P, &w) || mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol) {
+        if (mk_v3_dot(best.n, w.w) - best.dist <= MK_GJK_REL_TOL * best.dist + P.tol || known_vertex(&P, &w)) {
             /* w is the support along the answer's normal: its sep, for free */
             out->separation = -mk_v3_dot(best.n, w.w);
             out->state = MK_SOLVE_CONVERGED;

@@ -295,8 +295,9 @@ START_TEST(static_dynamic_mix) { run_motion(5, 400, 14, 0.5, 2, 0.8, 0.02, 0.005
 END_TEST
 
 /* AUTO starts small and coherent (SAP), then the scene grows past what SAP
- * is good at and AUTO switches to the grid: the set stays exact and the
- * events replay across the switch. */
+ * is good at (hundreds of boxes each passing several others a frame) and
+ * AUTO switches to the grid: the set stays exact and the events replay
+ * across the switch. */
 START_TEST(auto_switches_structure)
 {
     static world w;
@@ -311,7 +312,7 @@ START_TEST(auto_switches_structure)
         if (f == 20)
             for (i = 0; i < 260; ++i) {
                 add_obj(&w, random_box(&w.rng, 14, 1, 2), 0);
-                w.o[w.n - 1].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)0.05);
+                w.o[w.n - 1].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)0.3);
             }
         for (i = 0; i < w.n; ++i) drift(&w, i, 1);
         step(&w, f);
@@ -338,6 +339,36 @@ START_TEST(auto_switches_structure)
         MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[3], &st), MK_OK);
         ck_assert_int_eq(st.kind, MK_BP_SAP);
         ck_assert_int_ge(st.switches, 2);
+    }
+    world_fini(&w);
+}
+END_TEST
+
+/* AUTO for a caller with events, many movers, few statics: a block of
+ * touching cubes falling as one keeps every endpoint's order (SAP swaps
+ * nothing, while the grid would re-test every touching pair): SAP. The block
+ * then bursts, every cube flying off its own way past hundreds of
+ * endpoints: the grid. Exact sets and replayed events all along. */
+START_TEST(auto_weighs_swaps_against_candidates)
+{
+    static world w;
+    mk_bp_stats st;
+    int i, f;
+    if (!world_init(&w, 41, MAXN, 0) || !w.bp[3]) return;
+    for (i = 0; i < 6 * 6 * 8; ++i) {
+        mk_vec3 c = mk_v3((mk_real)(i % 6), (mk_real)((i / 6) % 6), (mk_real)(i / 36));
+        add_obj(&w, box_at(c, mk_v3(MK_REAL(0.5), MK_REAL(0.5), MK_REAL(0.5))), 0);
+        w.o[i].vel = mk_v3(0, 0, MK_REAL(-0.02));
+    }
+    for (f = 0; f < 200; ++f) {
+        if (f == 70)
+            for (i = 0; i < w.n; ++i) w.o[i].vel = mk_v3_scale(mk_rng_dir(&w.rng), MK_REAL(0.4));
+        for (i = 0; i < w.n; ++i) drift(&w, i, 1);
+        step(&w, f);
+        if (f == 66 || f == 199) {
+            MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[3], &st), MK_OK);
+            ck_assert_int_eq(st.kind, f == 66 ? MK_BP_SAP : MK_BP_HGRID);
+        }
     }
     world_fini(&w);
 }
@@ -1019,6 +1050,7 @@ static Suite *broadphase_suite(void)
     tcase_add_test(tc, mixed_sizes_1_to_1000);
     tcase_add_test(tc, static_dynamic_mix);
     tcase_add_test(tc, auto_switches_structure);
+    tcase_add_test(tc, auto_weighs_swaps_against_candidates);
     tcase_add_test(tc, touching_lattice);
     tcase_add_test(tc, tiny_huge_infinite);
     tcase_add_test(tc, filters_and_refilter);

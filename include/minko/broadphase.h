@@ -16,14 +16,16 @@
  * exact, sorted set either way. Three structures sit behind one API and
  * give identical sets: brute force (the oracle), incremental sweep and prune,
  * and a hierarchical hash grid; MK_BP_AUTO picks one from scene statistics and
- * mk_bp_stats() says which. AABBs may have infinite sides (ground planes) but
+ * mk_bp_stats() says which (for a caller with events and many movers: SAP's
+ * swaps against the grid's candidates, estimated on a sample of movers every
+ * 32 updates). AABBs may have infinite sides (ground planes) but
  * no NaN, no lo > hi, and no lo = +inf or hi = -inf. Memory comes only from
  * the mk_allocator given at creation: the proxy capacity is fixed then, and
  * the pair set and the grid's cell pool grow by doubling inside mk_bp_update()
  * only when they overflow (never in a steady state; a fixed-size mode refuses
  * with MK_ERR_CAPACITY instead), and AUTO allocates the structure it switches
  * to (stats.switches counts that) and, for a pairs_only caller, the sweep's
- * scratch (about 40 B per proxy) with which it measures crowding. An update that fails leaves the broadphase
+ * scratch (about 80 B per proxy) with which it measures crowding. An update that fails leaves the broadphase
  * valid: the next successful update rebuilds what was missed. Queries (region,
  * ray, stats) never allocate and never change the broadphase, so several
  * threads may query at once; no other call is thread-safe.
@@ -37,12 +39,14 @@
  *                every box crossing thousands of others per frame) or motion
  *                is incoherent; past a swap budget it falls back to a full
  *                sort of its axes and a stateless sweep for the pairs. With
- *                pairs_only it answers such updates by the sweep alone (no
- *                pair table, no events) until the scene is calm again (fewer
- *                than half the proxies changed), then rebuilds. The sweep
- *                (every update from scratch, no state): the axis of largest
+ *                pairs_only it answers such updates, and its first ones,
+ *                by the sweep alone (no pair table, no events) until the
+ *                scene is calm (fewer than half the proxies changed), then
+ *                rebuilds. The sweep (no pairs kept): the axis of largest
  *                spread is swept, the next one cut into rows as tall as the
- *                tallest box, one radix sort of n keys, and each box meets
+ *                tallest box, one sort of n keys (radix, or insertion from
+ *                the last sweep's order when sweeps follow each and the
+ *                scene is coherent: O(n)), and each box meets
  *                the boxes of its own and the next row that overlap it on
  *                the swept axis: O(n + those meetings + p) (the pairs are
  *                bucketed by their lower slot to sort them); a box

@@ -1,0 +1,271 @@
+/* test_bp_sweep.c: the stateless sort and sweep (bp_sweep.c) against an
+ * O(n^2) oracle computed here. A pairs_only SAP answers every busy update
+ * (at least half the proxies changed) with the sweep, so each scene below
+ * moves most of its boxes every frame and checks, frame by frame, that the
+ * set is exactly the brute-force set and that the sweep answered. Touching
+ * boxes (closed intervals: a shared face, edge or corner is an overlap) are
+ * built on exact binary lattices, where any rounding in the sweep's
+ * quantised keys or rows would lose a pair. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "minko/broadphase.h"
+#include "support/mk_test.h"
+
+#define MAXN 700
+
+typedef struct scene {
+    int n;
+    mk_aabb box[MAXN];
+    int is_static[MAXN];
+    mk_bp_id id[MAXN];
+    mk_bp *bp;
+    int frames, sweeps_before;
+    mk_bp_pair got[1 << 16], want[1 << 16];
+} scene;
+
+static int pair_cmp(const void *a, const void *b)
+{
+    const mk_bp_pair *x = (const mk_bp_pair *)a, *y = (const mk_bp_pair *)b;
+    if (x->a != y->a) return x->a < y->a ? -1 : 1;
+    return x->b < y->b ? -1 : (x->b > y->b);
+}
+
+static void scene_init(scene *s)
+{
+    mk_bp_def d = mk_bp_default_def();
+    memset(s, 0, sizeof *s);
+    d.kind = MK_BP_SAP;
+    d.pairs_only = 1;
+    d.proxy_capacity = MAXN;
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &s->bp), MK_OK);
+}
+
+static void add(scene *s, mk_aabb b, int is_static)
+{
+    int i = s->n++;
+    ck_assert_int_lt(i, MAXN);
+    s->box[i] = b;
+    s->is_static[i] = is_static;
+    MK_ASSERT_STATUS(mk_bp_create_proxy(s->bp, b, (void *)(intptr_t)(i + 1), ~0ull, ~0ull, is_static, &s->id[i]), MK_OK);
+}
+
+static void kill(scene *s, int i)
+{
+    MK_ASSERT_STATUS(mk_bp_destroy_proxy(s->bp, s->id[i]), MK_OK);
+    s->n--;
+    if (i == s->n) return;
+    s->box[i] = s->box[s->n]; /* the scene's indices stay dense; user pointers follow */
+    s->is_static[i] = s->is_static[s->n];
+    s->id[i] = s->id[s->n];
+    MK_ASSERT_STATUS(mk_bp_destroy_proxy(s->bp, s->id[i]), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_create_proxy(s->bp, s->box[i], (void *)(intptr_t)(i + 1), ~0ull, ~0ull, s->is_static[i], &s->id[i]), MK_OK);
+}
+
+static void move(scene *s, int i, mk_aabb b)
+{
+    s->box[i] = b;
+    MK_ASSERT_STATUS(mk_bp_move_proxy(s->bp, s->id[i], b), MK_OK);
+}
+
+/* Brute force over the scene's boxes, as object-index pairs. */
+static int oracle(scene *s)
+{
+    int i, j, n = 0;
+    for (i = 0; i < s->n; ++i)
+        for (j = i + 1; j < s->n; ++j) {
+            if ((s->is_static[i] && s->is_static[j]) || !mk_aabb_overlap(s->box[i], s->box[j])) continue;
+            ck_assert_int_lt(n, 1 << 16);
+            s->want[n].a = (mk_bp_id)i;
+            s->want[n].b = (mk_bp_id)j;
+            ++n;
+        }
+    return n;
+}
+
+static int query_count_cb(void *ctx, mk_bp_id id, void *user)
+{
+    (void)id; (void)user;
+    ++*(int *)ctx;
+    return 1;
+}
+
+/* One update: the set equals the oracle's, the update was a sweep, and a
+ * region query (read from the sweep's rows) finds what brute force finds. */
+static void check_frame(scene *s, mk_aabb q)
+{
+    const mk_bp_pair *p;
+    mk_bp_stats st;
+    int np, nw, i, found = 0, truth = 0;
+    MK_ASSERT_STATUS(mk_bp_update(s->bp), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_get_stats(s->bp, &st), MK_OK);
+    ck_assert_int_eq(st.sweeps, s->sweeps_before + 1); /* the sweep answered this update */
+    s->sweeps_before = st.sweeps;
+    p = mk_bp_pairs(s->bp, &np);
+    ck_assert_int_le(np, 1 << 16);
+    for (i = 0; i < np; ++i) {
+        mk_bp_id a = (mk_bp_id)((intptr_t)mk_bp_user(s->bp, p[i].a) - 1), b = (mk_bp_id)((intptr_t)mk_bp_user(s->bp, p[i].b) - 1);
+        ck_assert_msg(p[i].a < p[i].b && (i == 0 || pair_cmp(&p[i - 1], &p[i]) < 0), "set not sorted at %d", i);
+        s->got[i].a = a < b ? a : b;
+        s->got[i].b = a < b ? b : a;
+    }
+    qsort(s->got, (size_t)np, sizeof *s->got, pair_cmp);
+    nw = oracle(s);
+    for (i = 0; i < np && i < nw; ++i)
+        ck_assert_msg(s->got[i].a == s->want[i].a && s->got[i].b == s->want[i].b,
+                      "frame %d: pair %d is (%u, %u), brute force has (%u, %u)", s->frames, i, s->got[i].a, s->got[i].b,
+                      s->want[i].a, s->want[i].b);
+    ck_assert_msg(np == nw, "frame %d: %d pairs, brute force %d", s->frames, np, nw);
+    MK_ASSERT_STATUS(mk_bp_query_aabb(s->bp, q, query_count_cb, &found), MK_OK);
+    for (i = 0; i < s->n; ++i) truth += mk_aabb_overlap(s->box[i], q);
+    ck_assert_int_eq(found, truth);
+    s->frames++;
+}
+
+static mk_aabb box_at(mk_vec3 c, mk_vec3 half) { return mk_aabb_make(mk_v3_sub(c, half), mk_v3_add(c, half)); }
+
+static mk_aabb random_box(mk_rng *r, double world, double lo, double hi)
+{
+    mk_vec3 half = mk_v3((mk_real)(0.5 * mk_rng_range(r, lo, hi)), (mk_real)(0.5 * mk_rng_range(r, lo, hi)),
+                         (mk_real)(0.5 * mk_rng_range(r, lo, hi)));
+    return box_at(mk_rng_v3(r, 0, world), half);
+}
+
+static mk_aabb shifted(mk_aabb b, mk_vec3 d) { return mk_aabb_make(mk_v3_add(b.lo, d), mk_v3_add(b.hi, d)); }
+
+/* Boxes drifting a little each frame (every one moves: the sweep answers),
+ * spread mostly along one axis so that rows form, with a ground plane. */
+START_TEST(coherent)
+{
+    static scene s;
+    mk_rng r = {11};
+    const mk_real inf = (mk_real)INFINITY;
+    mk_vec3 vel[MAXN];
+    int i, f;
+    scene_init(&s);
+    add(&s, mk_aabb_make(mk_v3(-inf, -inf, -inf), mk_v3(inf, inf, (mk_real)0.3)), 1);
+    for (i = 1; i < 500; ++i) {
+        mk_vec3 c = mk_v3((mk_real)mk_rng_range(&r, 0, 30), (mk_real)mk_rng_range(&r, 0, 6), (mk_real)mk_rng_unit(&r));
+        add(&s, box_at(c, mk_aabb_extents(random_box(&r, 1, 0.1, 1.5))), i % 9 == 0);
+        vel[i] = mk_v3_scale(mk_rng_dir(&r), (mk_real)0.05);
+    }
+    for (f = 0; f < 40; ++f) {
+        for (i = 1; i < s.n; ++i)
+            if (!s.is_static[i]) move(&s, i, shifted(s.box[i], vel[i]));
+        check_frame(&s, random_box(&r, 20, 1, 4));
+    }
+    mk_bp_destroy(s.bp);
+}
+END_TEST
+
+/* A third of the boxes jump anywhere each frame; the others drift. */
+START_TEST(teleporting)
+{
+    static scene s;
+    mk_rng r = {12};
+    int i, f;
+    scene_init(&s);
+    for (i = 0; i < 600; ++i) add(&s, random_box(&r, 16, 0.2, 2.5), 0);
+    for (f = 0; f < 30; ++f) {
+        for (i = 0; i < s.n; ++i) {
+            if (mk_rng_unit(&r) < 0.33) move(&s, i, box_at(mk_rng_v3(&r, 0, 16), mk_aabb_extents(s.box[i])));
+            else move(&s, i, shifted(s.box[i], mk_v3_scale(mk_rng_dir(&r), (mk_real)0.1)));
+        }
+        check_frame(&s, random_box(&r, 16, 1, 5));
+    }
+    mk_bp_destroy(s.bp);
+}
+END_TEST
+
+/* Unit cubes on an integer lattice, some of them exactly face to face,
+ * edge to edge or corner to corner (lo of one == hi of the other, exactly
+ * representable), shifted each frame by a multiple of 1/4 so they keep
+ * touching; a far box stretches the sweep's range so that its quantised
+ * keys are coarse (many boxes share a key) and another one 2^-20 wide sits
+ * on a lattice face. Rows are one cube tall: touching across a row boundary
+ * is exercised too. */
+START_TEST(touching)
+{
+    static scene s;
+    mk_rng r = {13};
+    int i, f, x, y, z;
+    scene_init(&s);
+    for (x = 0; x < 9; ++x)
+        for (y = 0; y < 9; ++y)
+            for (z = 0; z < 4; ++z) {
+                mk_vec3 lo;
+                if (mk_rng_unit(&r) < 0.25) continue; /* holes: not every box has every neighbour */
+                lo = mk_v3((mk_real)x, (mk_real)y, (mk_real)z);
+                add(&s, mk_aabb_make(lo, mk_v3_add(lo, mk_v3(1, 1, 1))), 0);
+            }
+    add(&s, mk_aabb_make(mk_v3(3, 3, 4), mk_v3((mk_real)3 + (mk_real)ldexp(1, -20), 3, 5)), 0); /* flat, on a top face */
+    add(&s, mk_aabb_make(mk_v3(4, 4, 4), mk_v3(4, 4, 4)), 0);  /* a point on a corner */
+    add(&s, mk_aabb_make(mk_v3(4096, 0, 0), mk_v3(4097, 1, 1)), 0); /* far: coarse keys */
+    for (f = 0; f < 24; ++f) {
+        mk_vec3 d = mk_v3((mk_real)(0.25 * (f % 3)), (mk_real)(-0.25 * (f % 2)), (mk_real)0.5);
+        if (f % 4 == 3) d = mk_v3(-d.x, -d.y, -d.z);
+        for (i = 0; i < s.n; ++i) move(&s, i, shifted(s.box[i], d));
+        check_frame(&s, mk_aabb_make(mk_v3(2, 2, 1), mk_v3(3, 3, 2)));
+    }
+    mk_bp_destroy(s.bp);
+}
+END_TEST
+
+/* Sweeps in a row with proxies created and destroyed between them (each
+ * sweep starts from the last one's order), a box that turns infinite
+ * across the rows and back (a plane), and one that grows taller than the
+ * rows the plan was made for. */
+START_TEST(churn)
+{
+    static scene s;
+    mk_rng r = {14};
+    const mk_real inf = (mk_real)INFINITY;
+    int i, f;
+    scene_init(&s);
+    add(&s, mk_aabb_make(mk_v3(1, 1, 1), mk_v3(3, 3, 3)), 1); /* the largest box: a plan outlives frames */
+    for (i = 1; i < 400; ++i) add(&s, random_box(&r, 20, 0.2, 1.5), i % 17 == 0);
+    for (f = 0; f < 40; ++f) {
+        for (i = 0; i < s.n; ++i)
+            if (!s.is_static[i]) move(&s, i, shifted(s.box[i], mk_v3_scale(mk_rng_dir(&r), (mk_real)0.2)));
+        for (i = 0; i < 12; ++i) kill(&s, (int)(mk_rng_unit(&r) * s.n));
+        for (i = 0; i < 12; ++i) add(&s, random_box(&r, 20, 0.2, 1.5), 0);
+        if (f % 5 == 2) move(&s, 7, mk_aabb_make(mk_v3(-inf, -inf, 3), mk_v3(inf, inf, 4)));
+        if (f % 5 == 4) move(&s, 7, s.box[8]); /* finite again, on top of another box */
+        if (f == 20) move(&s, 9, mk_aabb_make(mk_v3(4, 4, 4), mk_v3(12, 12, 12))); /* taller than the rows */
+        check_frame(&s, random_box(&r, 20, 2, 6));
+    }
+    mk_bp_destroy(s.bp);
+}
+END_TEST
+
+/* Every box the same, then every box a point at the same place: all keys
+ * tie, every pair overlaps (static ones aside). */
+START_TEST(all_equal)
+{
+    static scene s;
+    int i, f;
+    scene_init(&s);
+    for (i = 0; i < 120; ++i) add(&s, mk_aabb_make(mk_v3(1, 2, 3), mk_v3(2, 3, 4)), i % 10 == 0);
+    for (f = 0; f < 4; ++f) {
+        mk_vec3 p = mk_v3((mk_real)f, (mk_real)-f, (mk_real)(2 * f));
+        for (i = 0; i < s.n; ++i)
+            if (!s.is_static[i]) move(&s, i, f % 2 ? mk_aabb_make(p, p) : mk_aabb_make(p, mk_v3_add(p, mk_v3(1, 1, 1))));
+        check_frame(&s, mk_aabb_make(p, p));
+    }
+    mk_bp_destroy(s.bp);
+}
+END_TEST
+
+int main(void)
+{
+    Suite *su = suite_create("bp_sweep");
+    TCase *tc = tcase_create("sweep");
+    tcase_set_timeout(tc, 60);
+    tcase_add_test(tc, coherent);
+    tcase_add_test(tc, teleporting);
+    tcase_add_test(tc, touching);
+    tcase_add_test(tc, churn);
+    tcase_add_test(tc, all_equal);
+    suite_add_tcase(su, tc);
+    return mk_test_run(su);
+}
