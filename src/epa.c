@@ -21,24 +21,25 @@ typedef struct epa_poly {
     short free_faces[MK_EPA_MAX_FACES];
 } epa_poly;
 
-/* Sets up face f over vertices (a, b, c); 0 if it is degenerate or has the
- * origin clearly outside (an inverted face): the polytope would be invalid. */
-static int face_set(epa_poly *P, int f, int a, int b, int c)
+/* Face f over silhouette edge (a, b) and apex w, given d_a = a - w and
+ * d_b = b - w (each shared by the two new faces at that vertex): normal
+ * d_a x d_b = (b - a) x (w - a). 0 if it is degenerate or has the origin clearly
+ * outside (an inverted face): the polytope would be invalid. */
+static int fan_face(epa_poly *P, int f, int a, int b, int wi, mk_vec3 da, mk_vec3 db)
 {
     epa_face *F = &P->f[f];
-    mk_vec3 wa = P->v[a].w, wb = P->v[b].w, wc = P->v[c].w;
-    mk_vec3 n = mk_v3_cross(mk_v3_sub(wb, wa), mk_v3_sub(wc, wa));
+    mk_vec3 n = mk_v3_cross(da, db);
     mk_real l2 = mk_v3_len2(n);
     F->v[0] = (short)a;
     F->v[1] = (short)b;
-    F->v[2] = (short)c;
+    F->v[2] = (short)wi;
     F->live = 1;
     if (!(l2 > 0)) return 0;
     F->n = mk_v3_scale(n, 1 / mk_sqrt_(l2));
-    /* The plane through the centroid does not favour one vertex (a face's
-     * distance only ranks faces and stops the loop: the answer is
+    /* The plane through the centroid w + (d_a + d_b) / 3: it favours no
+     * vertex (a distance only ranks faces and stops the loop; the answer is
      * re-evaluated by the support functions). */
-    F->dist = mk_v3_dot(F->n, mk_v3_add(mk_v3_add(wa, wb), wc)) * (MK_REAL(1.0) / 3);
+    F->dist = mk_v3_dot(F->n, P->v[wi].w) + mk_v3_dot(F->n, mk_v3_add(da, db)) * (MK_REAL(1.0) / 3);
     return F->dist >= -P->tol;
 }
 
@@ -135,7 +136,8 @@ static int init_tetrahedron(epa_poly *P, const mk_cso_vertex *t)
     }
     for (k = 0; k < 4; ++k) {
         int i;
-        ok = face_set(P, k, faces[k][0], faces[k][1], faces[k][2]) && ok;
+        ok = fan_face(P, k, faces[k][0], faces[k][1], faces[k][2], mk_v3_sub(P->v[faces[k][0]].w, P->v[faces[k][2]].w),
+                      mk_v3_sub(P->v[faces[k][1]].w, P->v[faces[k][2]].w)) && ok;
         for (i = 0; i < 3; ++i) link(P, k, i, across[k][i][0], across[k][i][1]);
     }
     return ok;
@@ -230,25 +232,6 @@ static int walk_silhouette(const epa_poly *P, epa_hole *H, int f, int i, int edg
         }
     } while (f != f0 || i != i0);
     return H->nh == edges;
-}
-
-/* Face f over silhouette edge (a, b) and apex w, given d_a = a - w and
- * d_b = b - w (each shared by the two new faces at that vertex): normal
- * d_a x d_b = (b - a) x (w - a). 0 if degenerate or inverted (face_set). */
-static int fan_face(epa_poly *P, int f, int a, int b, int wi, mk_vec3 da, mk_vec3 db)
-{
-    epa_face *F = &P->f[f];
-    mk_vec3 n = mk_v3_cross(da, db);
-    mk_real l2 = mk_v3_len2(n);
-    F->v[0] = (short)a;
-    F->v[1] = (short)b;
-    F->v[2] = (short)wi;
-    F->live = 1;
-    if (!(l2 > 0)) return 0;
-    F->n = mk_v3_scale(n, 1 / mk_sqrt_(l2));
-    /* through the centroid, as face_set: w + (d_a + d_b) / 3 */
-    F->dist = mk_v3_dot(F->n, P->v[wi].w) + mk_v3_dot(F->n, mk_v3_add(da, db)) * (MK_REAL(1.0) / 3);
-    return F->dist >= -P->tol;
 }
 
 /* Removes every face vertex wi sees (f0 among them) and fans the silhouette
