@@ -532,13 +532,21 @@ static void unfile_range(struct mk_hgrid *g, uint32_t slot, int level, const mk_
                 if (!in_range(keep, c)) cell_remove(g, level, c, slot | (guest ? MK_GUEST_ : 0));
 }
 
+static int range_within(const mk_range *a, const mk_range *b)
+{
+    return a->lo[0] >= b->lo[0] && a->hi[0] <= b->hi[0] && a->lo[1] >= b->lo[1] && a->hi[1] <= b->hi[1] &&
+           a->lo[2] >= b->lo[2] && a->hi[2] <= b->hi[2];
+}
+
 /* Moves slot's filing on one level from range o to range n, touching only
- * the cells that differ. */
+ * the cells that differ. Only a range that lost cells can lose candidates:
+ * one that just grew leaves its old candidates alone (new ones come with
+ * wake 0, so they are tested anyway). */
 static void refile_range(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, int level, const mk_range *o, const mk_range *n, int guest)
 {
     unfile_range(g, slot, level, o, n, guest);
     file_range(bp, g, slot, level, n, o, guest);
-    g->px[slot].st |= ST_REFILED;
+    if (!range_within(o, n)) g->px[slot].st |= ST_REFILED;
 }
 
 static void ov_add(struct mk_hgrid *g, uint32_t slot)
