@@ -786,20 +786,23 @@ static void restart_travel(mk_bp *bp, struct mk_hgrid *g)
     for (i = 0; i < bp->pairs.count; ++i) bp->pairs.e[i].wake = 0;
 }
 
-/* The largest move of any face from box o to box n (NaN when a side is infinite). */
+/* The largest move of any face from box o to box n (NaN when a side is
+ * infinite). Runs for every mover every update: maxima without branches,
+ * and the NaN (inf - inf) caught once by the sum of the moves, which a
+ * NaN makes NaN (a NaN travel fails every "cannot have changed" test, so
+ * the proxy is always looked at). */
 static double face_travel(const mk_aabb *o, const mk_aabb *n)
 {
-    const mk_real *ol = &o->lo.x, *oh = &o->hi.x, *nl = &n->lo.x, *nh = &n->hi.x;
-    double d = 0;
-    int k;
-    for (k = 0; k < 3; ++k) {
-        double dl = fabs((double)nl[k] - (double)ol[k]), dh = fabs((double)nh[k] - (double)oh[k]);
-        /* written so that a NaN (inf - inf) wins: NaN travel fails every
-         * "cannot have changed" test, so the proxy is always looked at */
-        if (!(dl <= d)) d = dl;
-        if (!(dh <= d)) d = dh;
-    }
-    return d;
+    double a = fabs((double)n->lo.x - (double)o->lo.x), b = fabs((double)n->lo.y - (double)o->lo.y);
+    double c = fabs((double)n->lo.z - (double)o->lo.z), d = fabs((double)n->hi.x - (double)o->hi.x);
+    double e = fabs((double)n->hi.y - (double)o->hi.y), f = fabs((double)n->hi.z - (double)o->hi.z);
+    double sum = ((a + b) + (c + d)) + (e + f);
+    a = a > b ? a : b;
+    c = c > d ? c : d;
+    e = e > f ? e : f;
+    a = a > c ? a : c;
+    a = a > e ? a : e;
+    return sum == sum ? a : sum;
 }
 
 /* ---- the static index ----
