@@ -428,11 +428,21 @@ static int sort_keys(mk_bp *bp, int reuse, int *nbig)
     return n;
 }
 
+/* The end of the row that starts at i (n when i == n). */
+static int row_end(const struct mk_sweep *w, int i, int n)
+{
+    uint64_t row;
+    if (i == n) return n;
+    row = w->key[i] >> 40;
+    for (++i; i < n && w->key[i] >> 40 == row; ++i) {}
+    return i;
+}
+
 mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b))
 {
     struct mk_sweep *w;
     sweep_ctx_ c;
-    int n, nbig, s, e;
+    int n, nbig, s, e, u;
     mk_status st;
     if (!bp->sweep && (st = sweep_create(bp)) != MK_OK) return st;
     w = bp->sweep;
@@ -442,14 +452,11 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
     w->nbig = nbig;
     w->kept = 0;
     c.bp = bp; c.w = w; c.report = report;
-    for (s = 0; s < n; s = e) {
+    for (s = 0, e = row_end(w, 0, n); s < n; s = e, e = u) {
         uint64_t row = w->key[s] >> 40;
-        int u;
-        for (e = s + 1; e < n && w->key[e] >> 40 == row; ++e) {}
+        u = row_end(w, e, n);
         if ((st = sweep_row(&c, s, e)) != MK_OK) return st;
-        if (e == n || w->key[e] >> 40 != row + 1) continue;
-        for (u = e + 1; u < n && w->key[u] >> 40 == row + 1; ++u) {}
-        if ((st = sweep_rows(&c, s, e, e, u)) != MK_OK) return st;
+        if (e < n && w->key[e] >> 40 == row + 1 && (st = sweep_rows(&c, s, e, e, u)) != MK_OK) return st;
     }
     if ((st = sweep_big(&c, n, nbig)) != MK_OK) return st;
     w->kept = 1;

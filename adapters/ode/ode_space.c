@@ -175,21 +175,11 @@ static mk_real round_up(dReal x)
  * widens each side (0 for the exact box); the result contains the dReal
  * box. A side at +inf (or -inf) on both ends becomes the largest finite
  * value to infinity, since the broadphase refuses lo = +inf and hi = -inf. */
-static mk_aabb to_mk_aabb_grown(const dReal *b, dReal grow)
+static mk_aabb to_mk_aabb_rounded(const dReal *b, dReal grow)
 {
     mk_aabb box;
     mk_real inf = (mk_real)HUGE_VAL, *lo = &box.lo.x, *hi = &box.hi.x;
     int k;
-#if !defined(MK_SINGLE)
-    /* mk_real is dReal: a box with ordered, finite bounds (every geom but
-     * planes) converts without rounding or special cases. */
-    if ((b[0] <= b[1]) & (b[2] <= b[3]) & (b[4] <= b[5]) & (b[0] <= DBL_MAX) & (b[2] <= DBL_MAX) & (b[4] <= DBL_MAX) &
-        (b[1] >= -DBL_MAX) & (b[3] >= -DBL_MAX) & (b[5] >= -DBL_MAX)) {
-        box.lo = mk_v3(b[0] - grow, b[2] - grow, b[4] - grow);
-        box.hi = mk_v3(b[1] + grow, b[3] + grow, b[5] + grow);
-        return box;
-    }
-#endif
     for (k = 0; k < 3; k++) {
         dReal l = b[2 * k], h = b[2 * k + 1];
         if (!(l <= h)) {
@@ -207,6 +197,23 @@ static mk_aabb to_mk_aabb_grown(const dReal *b, dReal grow)
         }
     }
     return box;
+}
+
+/* The same; inline, since every moving geom's box comes through here. */
+static inline mk_aabb to_mk_aabb_grown(const dReal *b, dReal grow)
+{
+#if !defined(MK_SINGLE)
+    /* mk_real is dReal: a box with ordered, finite bounds (every geom but
+     * planes) converts without rounding or special cases. */
+    if ((b[0] <= b[1]) & (b[2] <= b[3]) & (b[4] <= b[5]) & (b[0] <= DBL_MAX) & (b[2] <= DBL_MAX) & (b[4] <= DBL_MAX) &
+        (b[1] >= -DBL_MAX) & (b[3] >= -DBL_MAX) & (b[5] >= -DBL_MAX)) {
+        mk_aabb box;
+        box.lo = mk_v3(b[0] - grow, b[2] - grow, b[4] - grow);
+        box.hi = mk_v3(b[1] + grow, b[3] + grow, b[5] + grow);
+        return box;
+    }
+#endif
+    return to_mk_aabb_rounded(b, grow);
 }
 
 static mk_aabb to_mk_aabb(const dReal *b) { return to_mk_aabb_grown(b, 0); }
