@@ -25,7 +25,6 @@
  *    stay in the broadphase and are filtered out of its pairs, which gives
  *    the same set as skipping them.
  */
-#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -193,21 +192,21 @@ static mk_aabb to_mk_aabb_rounded(const dReal *b)
     return box;
 }
 
-/* The same; inline, since every geom's box comes through here every call. */
+/* The box every call gives the sweep; inline, since every geom's box comes
+ * through here every call. With mk_real = dReal a plain copy: the sweep
+ * checks every box anyway, and a box it refuses (a NaN bound, a side at
+ * +inf on both ends; planes are fine) sends the call to the rounded
+ * conversion (sweep_records), so valid boxes are not checked twice. */
 static inline mk_aabb to_mk_aabb(const dReal *b)
 {
-#if !defined(MK_SINGLE)
-    /* mk_real is dReal: a box with ordered, finite bounds (every geom but
-     * planes) converts without rounding or special cases. */
-    if ((b[0] <= b[1]) & (b[2] <= b[3]) & (b[4] <= b[5]) & (b[0] <= DBL_MAX) & (b[2] <= DBL_MAX) & (b[4] <= DBL_MAX) &
-        (b[1] >= -DBL_MAX) & (b[3] >= -DBL_MAX) & (b[5] >= -DBL_MAX)) {
-        mk_aabb box;
-        box.lo = mk_v3(b[0], b[2], b[4]);
-        box.hi = mk_v3(b[1], b[3], b[5]);
-        return box;
-    }
-#endif
+#if defined(MK_SINGLE)
     return to_mk_aabb_rounded(b);
+#else
+    mk_aabb box;
+    box.lo = mk_v3(b[0], b[2], b[4]);
+    box.hi = mk_v3(b[1], b[3], b[5]);
+    return box;
+#endif
 }
 
 /* ---- per-space state ---- */
@@ -332,6 +331,18 @@ static mk_status sync(space_state *st)
     return MK_OK;
 }
 
+/* The pairs of records whose boxes overlap: a candidate set for ODE's own
+ * test, since boxes that ODE never separates (NaN) or the broadphase
+ * refuses are widened to all space by the rounded conversion. */
+static mk_status sweep_records(space_state *st, const mk_bp_pair **pairs, int *np)
+{
+    int i;
+    mk_status s = mk_bp_sweep_boxes(st->bp, st->boxes, 0, st->n, pairs, np);
+    if (s != MK_ERR_BAD_AABB) return s;
+    for (i = 0; i < st->n; i++) st->boxes[i] = to_mk_aabb_rounded(st->entries[i].aabb);
+    return mk_bp_sweep_boxes(st->bp, st->boxes, 0, st->n, pairs, np);
+}
+
 /* ---- reporting ---- */
 
 static int push_pair(dGeomID a, dGeomID b)
@@ -374,7 +385,7 @@ void mk_ode_space_collide(dSpaceID space, void *data, dNearCallback *callback)
         return;
     }
     s = sync(st);
-    if (s == MK_OK) s = mk_bp_sweep_boxes(st->bp, st->boxes, 0, st->n, &pairs, &np);
+    if (s == MK_OK) s = sweep_records(st, &pairs, &np);
     if (s != MK_OK) {
         note_error(s);
         return;
