@@ -70,8 +70,8 @@ struct mk_sweep {
 
 enum { KEPT_NONE = 0, KEPT_PROXIES, KEPT_BOXES };
 
-/* Pairs collected before they are reported (proxies) or handed out (boxes). */
-#define MK_SWEEP_CHUNK_ 1024
+/* The first size of the array of pairs a box sweep hands out. */
+#define MK_SWEEP_OUT_ 1024
 
 static size_t sweep_bytes_per_proxy(void)
 {
@@ -100,7 +100,7 @@ static mk_status sweep_create(mk_bp *bp)
     w->n = w->nbig = w->kept = w->age = w->crowded = w->sort_wait = w->sort_backoff = 0;
     w->src_n = 0;
     w->nout = 0;
-    w->outcap = MK_SWEEP_CHUNK_;
+    w->outcap = MK_SWEEP_OUT_;
     if (!(w->out = (mk_bp_pair *)mk_bp_alloc_(bp, (size_t)w->outcap * sizeof *w->out))) {
         mk_bp_free_(bp, p, n * sweep_bytes_per_proxy());
         mk_bp_free_(bp, w, sizeof *w);
@@ -254,27 +254,19 @@ static void plan(const src_ *v, frame_ *f)
 typedef mk_status (*report_fn)(mk_bp *bp, uint32_t a, uint32_t b);
 
 typedef struct sweep_ctx_ {
+    mk_bp *bp;
     const src_ *v;
     struct mk_sweep *w;
-    report_fn report;     /* proxies: each pair goes there; NULL: pairs stay in w->out */
+    report_fn report;     /* proxies: each pair goes there; NULL: pairs go to w->out */
 } sweep_ctx_;
 
-/* w->out is full. Proxies: report its pairs (no static-static pair) and
- * start over; boxes: double it, unless the caller fixed the capacity. */
-static mk_status flush(const sweep_ctx_ *c)
+/* w->out is full: double it, unless the caller fixed the capacity. */
+static mk_status grow_out(const sweep_ctx_ *c)
 {
     struct mk_sweep *w = c->w;
-    mk_bp *bp = c->v->bp;
-    int i, cap;
+    mk_bp *bp = c->bp;
+    int cap;
     mk_status st;
-    if (c->report) {
-        for (i = 0; i < w->nout; ++i) {
-            uint32_t a = w->out[i].a, b = w->out[i].b;
-            if (!mk_bp_both_static_(bp, a, b) && (st = c->report(bp, a, b)) != MK_OK) return st;
-        }
-        w->nout = 0;
-        return MK_OK;
-    }
     cap = w->outcap > INT32_MAX / 2 / (int)sizeof *w->out ? INT32_MAX : 2 * w->outcap;
     if (bp->def.fixed_capacity && cap > bp->pairs.cap) cap = bp->pairs.cap; /* the caller's bound */
     if (cap <= w->outcap) return MK_ERR_CAPACITY;
@@ -283,33 +275,48 @@ static mk_status flush(const sweep_ctx_ *c)
     return MK_OK;
 }
 
+/* An overlapping pair: to the proxies' report (no static-static pair), or
+ * into w->out. */
 static inline mk_status emit(const sweep_ctx_ *c, uint32_t a, uint32_t b)
 {
     struct mk_sweep *w = c->w;
     mk_status st;
-    if (w->nout == w->outcap && (st = flush(c)) != MK_OK) return st;
-    w->out[w->nout].a = a < b ? a : b;
-    w->out[w->nout].b = a < b ? b : a;
-    w->nout++;
+    int i;
+    if (c->report) return mk_bp_both_static_(c->bp, a, b) ? MK_OK : c->report(c->bp, a, b);
+    if ((i = w->nout) == w->outcap && (st = grow_out(c)) != MK_OK) return st;
+    w->out[i].a = a < b ? a : b;
+    w->out[i].b = a < b ? b : a;
+    w->nout = i + 1;
     return MK_OK;
 }
 
-static inline mk_status test(const sweep_ctx_ *c, int i, int j)
+/* The sorted arrays the inner loops read, in locals: emit may call out,
+ * and its stores could alias them, so nothing is reloaded through c. */
+typedef struct rows_ { const uint32_t *qlo, *qhi, *slot; const mk_aabb *box; } rows_;
+
+static rows_ rows_of(const struct mk_sweep *w)
 {
-    if (!mk_bp_overlap_(&c->w->box[i], &c->w->box[j])) return MK_OK;
-    return emit(c, c->w->slot[i], c->w->slot[j]);
+    rows_ r;
+    r.qlo = w->qlo; r.qhi = w->qhi; r.slot = w->slot; r.box = w->box;
+    return r;
+}
+
+static inline mk_status test(const sweep_ctx_ *c, rows_ r, int i, int j)
+{
+    if (!mk_bp_overlap_(&r.box[i], &r.box[j])) return MK_OK;
+    return emit(c, r.slot[i], r.slot[j]);
 }
 
 /* Pairs inside one row [s, e). */
 static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
 {
-    const uint32_t *qlo = c->w->qlo;
+    const rows_ r = rows_of(c->w);
     int i, j;
     mk_status st;
     for (i = s; i < e; ++i) {
-        uint32_t hi = c->w->qhi[i];
-        for (j = i + 1; j < e && qlo[j] <= hi; ++j)
-            if ((st = test(c, i, j)) != MK_OK) return st;
+        uint32_t hi = r.qhi[i];
+        for (j = i + 1; j < e && r.qlo[j] <= hi; ++j)
+            if ((st = test(c, r, i, j)) != MK_OK) return st;
     }
     return MK_OK;
 }
@@ -319,17 +326,20 @@ static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
  * before it ends. */
 static mk_status sweep_rows(const sweep_ctx_ *c, int s, int e, int t, int u)
 {
-    const uint32_t *qlo = c->w->qlo, *qhi = c->w->qhi;
+    const rows_ r = rows_of(c->w);
     mk_status st;
     int j;
     while (s < e && t < u) {
-        if (qlo[s] <= qlo[t]) {
-            for (j = t; j < u && qlo[j] <= qhi[s]; ++j)
-                if ((st = test(c, s, j)) != MK_OK) return st;
+        uint32_t ls = r.qlo[s], lt = r.qlo[t];
+        if (ls <= lt) {
+            uint32_t hi = r.qhi[s];
+            for (j = t; j < u && r.qlo[j] <= hi; ++j)
+                if ((st = test(c, r, s, j)) != MK_OK) return st;
             ++s;
         } else {
-            for (j = s; j < e && qlo[j] <= qhi[t]; ++j)
-                if ((st = test(c, j, t)) != MK_OK) return st;
+            uint32_t hi = r.qhi[t];
+            for (j = s; j < e && r.qlo[j] <= hi; ++j)
+                if ((st = test(c, r, j, t)) != MK_OK) return st;
             ++t;
         }
     }
@@ -385,11 +395,21 @@ static inline void file_box(struct mk_sweep *w, const src_ *v, uint32_t s, uint6
 /* Every box in the source, in slot order: keys, and the big ones apart. */
 static int keys_by_slot(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k)
 {
-    int n = 0;
-    uint32_t s;
-    *nbig = 0;
-    for (s = 0; s < v->n; ++s)
-        if (src_in(v, s)) file_box(w, v, s, w->key, &n, nbig, k);
+    /* Locals: the stores to key[] could alias anything read through pointers. */
+    const frame_ f = w->f;
+    const src_ src = *v;
+    uint64_t *key = w->key;
+    uint32_t *big = w->big, s;
+    keying_ kk = *k;
+    int n = 0, nb = 0;
+    for (s = 0; s < src.n; ++s) {
+        const mk_aabb *b = src_box(&src, s);
+        if (!src_in(&src, s)) continue;
+        if (is_big(&f, b)) big[nb++] = s;
+        else key[n++] = key_of(&f, b, s, &kk);
+    }
+    *k = kk;
+    *nbig = nb;
     return n;
 }
 
@@ -522,7 +542,6 @@ static mk_status run(const sweep_ctx_ *c, int kind, int reuse)
         if (e < n && w->key[e] >> 40 == row + 1 && (st = sweep_rows(c, s, e, e, u)) != MK_OK) return st;
     }
     if ((st = sweep_big(c, n, nbig)) != MK_OK) return st;
-    if (c->report && (st = flush(c)) != MK_OK) return st;
     w->kept = kind;
     return MK_OK;
 }
@@ -550,7 +569,7 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
     mk_status st;
     if ((st = ensure(bp)) != MK_OK) return st;
     v = proxies_of(bp);
-    c.v = &v; c.w = bp->sweep; c.report = report;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = report;
     /* The arrays describe the last sweep only if the last update was one. */
     return run(&c, KEPT_PROXIES, bp->swept);
 }
@@ -568,7 +587,7 @@ mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n,
     v.base = (const char *)boxes;
     v.stride = stride;
     v.n = (uint32_t)n;
-    c.v = &v; c.w = bp->sweep; c.report = NULL;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = NULL;
     if ((st = run(&c, KEPT_BOXES, 1)) != MK_OK) return st;
     *pairs = c.w->out;
     *count = c.w->nout;
