@@ -102,7 +102,7 @@ static mk_status sweep_create(mk_bp *bp)
     w->nout = 0;
     w->outcap = MK_SWEEP_OUT_;
     if (!(w->out = (mk_bp_pair *)mk_bp_alloc_(bp, (size_t)w->outcap * sizeof *w->out))) {
-        mk_bp_free_(bp, p, n * sweep_bytes_per_proxy());
+        mk_bp_free_(bp, w->box, n * sweep_bytes_per_proxy());
         mk_bp_free_(bp, w, sizeof *w);
         return MK_ERR_OUT_OF_MEMORY;
     }
