@@ -24,9 +24,16 @@
 // performDiscreteCollisionDetection; the referee and the counters run outside
 // the timed region. The backends of a scene run side by side, one step each
 // in turn, so load on a shared machine falls on all of them alike. With
-// --trials N every scene runs N times from slightly perturbed starts and each
-// figure is the median (tunnelling the worst): resting stacks creep in a
-// direction set by round-off, so one run says little about drift.
+// --trials N every scene runs N times and each figure is the median
+// (tunnelling the worst): resting stacks creep in a direction set by
+// round-off, so one run says little about drift. Trial 0 is the scene as
+// specified; in trial k > 0 every dynamic body starts moved by a seeded
+// random offset of up to 1e-3 of its bounding radius per axis (seed: k and
+// the body's index), the same offsets for every backend; nothing else varies.
+// A second table gives each stability metric as mean +- sample standard
+// deviation over the trials (also in the JSON as <metric>_mean / _sd) and
+// calls a backend's difference from native noise when it is within twice
+// the standard error of the difference of the means.
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
@@ -604,7 +611,28 @@ struct Result {
     long minko_pairs = -1, native_pairs = -1;            // Minko narrowphase: algorithms on Minko / left to Bullet
     int trials = 1;                                      // figures are medians over this many perturbed runs
     std::vector<btVector3> end_pos;
+    // Stability metrics over the trials (mean, standard deviation, trials
+    // that have the metric): what separates a real difference from noise.
+    struct Spread {
+        double mean = 0, sd = 0;
+        int n = 0;
+    };
+    Spread spread[5];  // in kStability order
 };
+
+// The stability metrics whose spread over the trials is reported, lower is
+// better for each (tunnelling is the worst trial's, not a spread).
+struct StabilityMetric {
+    const char *name;
+    double Result::*field;
+};
+const StabilityMetric kStability[] = {{"max_penetration", &Result::max_penetration},
+                                      {"end_penetration", &Result::end_penetration},
+                                      {"fallen", &Result::fallen},
+                                      {"drift", &Result::drift},
+                                      {"ke_end", &Result::ke_end}};
+static_assert(sizeof kStability / sizeof kStability[0] == sizeof Result().spread / sizeof Result().spread[0],
+              "one spread per stability metric");
 
 double mean(const std::vector<double> &v)
 {
@@ -885,7 +913,32 @@ Result median_of(const std::vector<Result> &trials)
         r.referee_failures += t.referee_failures;
     }
     r.trials = (int)trials.size();
+    for (size_t m = 0; m < sizeof kStability / sizeof kStability[0]; m++) {
+        std::vector<double> v;
+        for (const Result &t : trials)
+            if (t.*kStability[m].field >= 0) v.push_back(t.*kStability[m].field);
+        Result::Spread &sp = r.spread[m];
+        sp.n = (int)v.size();
+        sp.mean = mean(v);
+        double ss = 0;
+        for (double x : v) ss += (x - sp.mean) * (x - sp.mean);
+        sp.sd = sp.n > 1 ? std::sqrt(ss / (sp.n - 1)) : 0;  // sample standard deviation
+    }
     return r;
+}
+
+// How a backend's metric compares with native's over the trials: "noise"
+// when the means differ by less than twice the standard error of their
+// difference (Welch; about one trial standard deviation at 7 trials), so a
+// difference inside the spread between trials is not called a win or a loss.
+const char *verdict(const Result::Spread &m, const Result::Spread &native)
+{
+    if (m.n == 0 || native.n == 0) return "-";
+    const double se = std::sqrt(m.sd * m.sd / m.n + native.sd * native.sd / native.n);
+    const double d = m.mean - native.mean;
+    if (d == 0) return "same";
+    if (std::fabs(d) <= 2 * se) return "noise";
+    return d < 0 ? "better" : "worse";
 }
 
 // ---- output ---------------------------------------------------------------------
@@ -914,6 +967,23 @@ void print_row(const SceneSpec &s, const Result &r, const Result &native)
                     r.native_pairs);
 }
 
+// One line per scene and backend when a scene ran more than once: each
+// stability metric as mean +- standard deviation over the trials, and the
+// verdict against native (none on native's own line, or without native).
+void print_spread(const SceneSpec &s, const Result &r, const Result *native)
+{
+    std::printf("  %-13s %-20s", s.name.c_str(), r.backend.c_str());
+    for (size_t m = 0; m < sizeof kStability / sizeof kStability[0]; m++) {
+        const Result::Spread &sp = r.spread[m];
+        char cell[64] = "-";
+        if (sp.n > 0) std::snprintf(cell, sizeof cell, "%.3g+-%.2g", sp.mean, sp.sd);
+        if (native && sp.n > 0)
+            std::snprintf(cell + std::strlen(cell), sizeof cell - std::strlen(cell), " %s", verdict(sp, native->spread[m]));
+        std::printf(" %22s", cell);
+    }
+    std::printf("\n");
+}
+
 void write_json(FILE *f, const SceneSpec &s, const Result &r)
 {
     std::fprintf(f,
@@ -924,7 +994,13 @@ void write_json(FILE *f, const SceneSpec &s, const Result &r)
                  "\"tunnelled\":%d",
                  s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.steps, r.bodies, r.ms, r.collision_ms,
                  r.broadphase_ms, r.ms_mean, r.collision_ms_mean, r.pairs, r.manifolds, r.points, r.max_penetration, r.end_penetration, r.ke_end, r.tunnelled);
-    if (r.trials > 1) std::fprintf(f, ",\"trials\":%d", r.trials);
+    if (r.trials > 1) {
+        std::fprintf(f, ",\"trials\":%d", r.trials);
+        for (size_t m = 0; m < sizeof kStability / sizeof kStability[0]; m++)
+            if (r.spread[m].n > 0)
+                std::fprintf(f, ",\"%s_mean\":%.6g,\"%s_sd\":%.6g", kStability[m].name, r.spread[m].mean,
+                             kStability[m].name, r.spread[m].sd);
+    }
     if (r.drift >= 0) std::fprintf(f, ",\"drift\":%.6g", r.drift);
     if (r.fallen >= 0) std::fprintf(f, ",\"fallen\":%.6g", r.fallen);
     if (r.divergence >= 0) std::fprintf(f, ",\"divergence_from_native\":%.6g", r.divergence);
@@ -945,7 +1021,8 @@ void usage(const char *argv0)
                  "  --no-referee no penetration referee (max_pen reads 0; for profiling)\n"
                  "  --steps N    override every scene's step count\n"
                  "  --trials N   run each scene N times, starts perturbed by 1e-3 of each body's size\n"
-                 "               from the second on; every figure is the median over the trials\n"
+                 "               from the second on; every figure is the median over the trials, and\n"
+                 "               a second table gives stability metrics as mean+-sd with a verdict vs native\n"
                  "  --per-trial  also print every trial's row (backend#trial; the table only)\n"
                  "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n",
                  argv0);
@@ -1043,12 +1120,22 @@ int main(int argc, char **argv)
                     print_row(scene, r, per_backend[0][(size_t)t]);
                 }
         Result native;
+        std::vector<Result> merged;
         for (size_t k = 0; k < picked.size(); k++) {
-            Result r = median_of(per_backend[k]);
+            merged.push_back(median_of(per_backend[k]));
+            const Result &r = merged.back();
             if (picked[k] == 0) native = r;
             print_row(scene, r, native);
             if (out) write_json(out, scene, r);
             std::fflush(stdout);
+        }
+        if (trials > 1) {
+            std::printf("  %d trials, mean+-sd (verdict vs native: noise = inside 2 standard errors)\n", trials);
+            std::printf("  %-13s %-20s", "scene", "backend");
+            for (const StabilityMetric &m : kStability) std::printf(" %22s", m.name);
+            std::printf("\n");
+            for (size_t k = 0; k < merged.size(); k++)
+                print_spread(scene, merged[k], picked[0] == 0 && k > 0 ? &merged[0] : nullptr);
         }
     }
     if (out) std::fclose(out);

@@ -1,5 +1,8 @@
-/* bp_sweep.c: every overlapping pair from scratch, with no state kept between
- * calls: a sort and sweep in rows.
+/* bp_sweep.c: every overlapping pair from scratch, with no pairs kept between
+ * calls: a sort and sweep in rows. It serves a pairs_only SAP's busy updates
+ * (the proxies' boxes, statics among them, pairs reported to the pair
+ * table) and mk_bp_sweep_boxes (a caller's array of boxes, the pairs handed
+ * out as found, with no proxies, pair table or per-pair call at all).
  *
  * Why rows: a plain sort and sweep on one axis tests every pair that
  * overlaps on that axis, and on a scene spread over a plane (ODE's exploded
@@ -55,12 +58,20 @@ struct mk_sweep {
     int cap;
     frame_ f;             /* of the last sweep, with its n sorted and nbig big boxes: */
     int n, nbig;          /* region queries after a stateless update read them */
-    int kept;             /* f and key[0, n) may seed the next sweep (see sort_keys) */
+    int kept;             /* f and key[0, n) may seed the next sweep of the same kind (KEPT_*; see sort_keys) */
+    uint32_t src_n;       /* boxes of the caller's array in the last box sweep: later ones are new */
+    mk_bp_pair *out;      /* overlapping pairs as found (slots or box indices, a < b) */
+    int nout, outcap;
     int age;              /* sweeps since f was planned */
     int crowded;          /* the last sweep clamped many boxes to the ends of f's ranges */
     int sort_wait;        /* sweeps left before an insertion sort is tried again */
     int sort_backoff;     /* the next wait, doubled each time one gives up */
 };
+
+enum { KEPT_NONE = 0, KEPT_PROXIES, KEPT_BOXES };
+
+/* The first size of the array of pairs a box sweep hands out. */
+#define MK_SWEEP_OUT_ 1024
 
 static size_t sweep_bytes_per_proxy(void)
 {
@@ -87,6 +98,14 @@ static mk_status sweep_create(mk_bp *bp)
     w->big = (uint32_t *)p;
     w->cap = bp->cap;
     w->n = w->nbig = w->kept = w->age = w->crowded = w->sort_wait = w->sort_backoff = 0;
+    w->src_n = 0;
+    w->nout = 0;
+    w->outcap = MK_SWEEP_OUT_;
+    if (!(w->out = (mk_bp_pair *)mk_bp_alloc_(bp, (size_t)w->outcap * sizeof *w->out))) {
+        mk_bp_free_(bp, w->box, n * sweep_bytes_per_proxy());
+        mk_bp_free_(bp, w, sizeof *w);
+        return MK_ERR_OUT_OF_MEMORY;
+    }
     bp->sweep = w;
     return MK_OK;
 }
@@ -96,6 +115,7 @@ void mk_sweep_destroy_(mk_bp *bp)
     struct mk_sweep *w = bp->sweep;
     if (!w) return;
     mk_bp_free_(bp, w->box, (size_t)w->cap * sweep_bytes_per_proxy());
+    mk_bp_free_(bp, w->out, (size_t)w->outcap * sizeof *w->out);
     mk_bp_free_(bp, w, sizeof *w);
     bp->sweep = NULL;
 }
@@ -104,6 +124,27 @@ void mk_sweep_destroy_(mk_bp *bp)
 static int in_structure(const mk_bp *bp, uint32_t s)
 {
     return (bp->flags[s] & (MK_PF_ALIVE | MK_PF_DYING)) == MK_PF_ALIVE;
+}
+
+/* Where one sweep reads its boxes: the proxies (box[] of the slots in the
+ * structure, statics among them) or a caller's array (every box, none
+ * static). Everything but the keys' order and the reporting is shared. */
+typedef struct src_ {
+    mk_bp *bp;
+    int proxies;          /* 1: bp's proxies; 0: the caller's boxes */
+    const char *base;     /* box of slot s at base + s * stride */
+    size_t stride;
+    uint32_t n;           /* slots [0, n) */
+} src_;
+
+static inline const mk_aabb *src_box(const src_ *v, uint32_t s)
+{
+    return (const mk_aabb *)(const void *)(v->base + s * v->stride);
+}
+
+static inline int src_in(const src_ *v, uint32_t s)
+{
+    return v->proxies ? in_structure(v->bp, s) : s < v->n;
 }
 
 static double lo_of(const mk_aabb *b, int axis) { return (double)(&b->lo.x)[axis]; }
@@ -137,15 +178,15 @@ typedef struct spread_ {
     double lo[3], hi[3];  /* range of the sampled boxes finite on that axis */
 } spread_;
 
-static void measure(const mk_bp *bp, spread_ *p)
+static void measure(const src_ *v, spread_ *p)
 {
-    uint32_t s, stride = (uint32_t)(bp->hi_slot / MK_SWEEP_SAMPLE_ + 1);
+    uint32_t s, stride = v->n / MK_SWEEP_SAMPLE_ + 1;
     int k;
     memset(p, 0, sizeof *p);
     for (k = 0; k < 3; ++k) { p->lo[k] = HUGE_VAL; p->hi[k] = -HUGE_VAL; }
-    for (s = 0; s < (uint32_t)bp->hi_slot; s += stride) {
-        const mk_aabb *b = &bp->box[s];
-        if (!in_structure(bp, s)) continue;
+    for (s = 0; s < v->n; s += stride) {
+        const mk_aabb *b = src_box(v, s);
+        if (!src_in(v, s)) continue;
         for (k = 0; k < 3; ++k) {
             double l = lo_of(b, k), h = hi_of(b, k), c = 0.5 * (l + h);
             if (!(h - l <= MK_REAL_MAX)) continue; /* infinite: says nothing about spread */
@@ -157,13 +198,14 @@ static void measure(const mk_bp *bp, spread_ *p)
 }
 
 /* The largest finite extent on `axis`, over every box. */
-static double largest_extent(const mk_bp *bp, int axis)
+static double largest_extent(const src_ *v, int axis)
 {
     double m = 0;
     uint32_t s;
-    for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
-        double e = hi_of(&bp->box[s], axis) - lo_of(&bp->box[s], axis);
-        if (in_structure(bp, s) && e > m && e <= MK_REAL_MAX) m = e;
+    for (s = 0; s < v->n; ++s) {
+        const mk_aabb *b = src_box(v, s);
+        double e = hi_of(b, axis) - lo_of(b, axis);
+        if (src_in(v, s) && e > m && e <= MK_REAL_MAX) m = e;
     }
     return m;
 }
@@ -179,12 +221,12 @@ static void widen(double *lo, double *hi)
     *hi += m;
 }
 
-static void plan(const mk_bp *bp, frame_ *f)
+static void plan(const src_ *v, frame_ *f)
 {
     spread_ p;
     double var[3], xlo, xhi, ylo, yhi, hmax;
     int k;
-    measure(bp, &p);
+    measure(v, &p);
     for (k = 0; k < 3; ++k) var[k] = p.cnt[k] ? p.sum2[k] / p.cnt[k] - (p.sum[k] / p.cnt[k]) * (p.sum[k] / p.cnt[k]) : 0;
     f->ax = 0;
     for (k = 1; k < 3; ++k) if (var[k] > var[f->ax]) f->ax = k;
@@ -194,7 +236,7 @@ static void plan(const mk_bp *bp, frame_ *f)
     ylo = p.lo[f->ay]; yhi = p.hi[f->ay];
     widen(&xlo, &xhi);
     widen(&ylo, &yhi);
-    hmax = largest_extent(bp, f->ay);
+    hmax = largest_extent(v, f->ay);
     f->x0 = xlo <= xhi ? xlo : 0;
     f->xscale = xhi > xlo ? (double)(MK_SWEEP_Q_MAX_ - 1) / (xhi - xlo) : 0;
     if (!(f->xscale <= 1e300)) f->xscale = 0;
@@ -213,30 +255,68 @@ typedef mk_status (*report_fn)(mk_bp *bp, uint32_t a, uint32_t b);
 
 typedef struct sweep_ctx_ {
     mk_bp *bp;
-    const struct mk_sweep *w;
-    report_fn report;
+    const src_ *v;
+    struct mk_sweep *w;
+    report_fn report;     /* proxies: each pair goes there; NULL: pairs go to w->out */
 } sweep_ctx_;
 
-static inline mk_status test(const sweep_ctx_ *c, int i, int j)
+/* w->out is full: double it, unless the caller fixed the capacity. */
+static mk_status grow_out(const sweep_ctx_ *c)
 {
-    uint32_t a, b;
-    if (!mk_bp_overlap_(&c->w->box[i], &c->w->box[j])) return MK_OK;
-    a = c->w->slot[i];
-    b = c->w->slot[j];
-    if (mk_bp_both_static_(c->bp, a, b)) return MK_OK;
-    return c->report(c->bp, a, b);
+    struct mk_sweep *w = c->w;
+    mk_bp *bp = c->bp;
+    int cap;
+    mk_status st;
+    cap = w->outcap > INT32_MAX / 2 / (int)sizeof *w->out ? INT32_MAX : 2 * w->outcap;
+    if (bp->def.fixed_capacity && cap > bp->pairs.cap) cap = bp->pairs.cap; /* the caller's bound */
+    if (cap <= w->outcap) return MK_ERR_CAPACITY;
+    if ((st = mk_bp_grow_(bp, (void **)&w->out, sizeof *w->out, (size_t)w->outcap, (size_t)cap)) != MK_OK) return st;
+    w->outcap = cap;
+    return MK_OK;
+}
+
+/* An overlapping pair: to the proxies' report (no static-static pair), or
+ * into w->out. */
+static inline mk_status emit(const sweep_ctx_ *c, uint32_t a, uint32_t b)
+{
+    struct mk_sweep *w = c->w;
+    mk_status st;
+    int i;
+    if (c->report) return mk_bp_both_static_(c->bp, a, b) ? MK_OK : c->report(c->bp, a, b);
+    if ((i = w->nout) == w->outcap && (st = grow_out(c)) != MK_OK) return st;
+    w->out[i].a = a < b ? a : b;
+    w->out[i].b = a < b ? b : a;
+    w->nout = i + 1;
+    return MK_OK;
+}
+
+/* The sorted arrays the inner loops read, in locals: emit may call out,
+ * and its stores could alias them, so nothing is reloaded through c. */
+typedef struct rows_ { const uint32_t *qlo, *qhi, *slot; const mk_aabb *box; } rows_;
+
+static rows_ rows_of(const struct mk_sweep *w)
+{
+    rows_ r;
+    r.qlo = w->qlo; r.qhi = w->qhi; r.slot = w->slot; r.box = w->box;
+    return r;
+}
+
+static inline mk_status test(const sweep_ctx_ *c, rows_ r, int i, int j)
+{
+    if (!mk_bp_overlap_(&r.box[i], &r.box[j])) return MK_OK;
+    return emit(c, r.slot[i], r.slot[j]);
 }
 
 /* Pairs inside one row [s, e). */
 static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
 {
-    const uint32_t *qlo = c->w->qlo;
+    const rows_ r = rows_of(c->w);
     int i, j;
     mk_status st;
     for (i = s; i < e; ++i) {
-        uint32_t hi = c->w->qhi[i];
-        for (j = i + 1; j < e && qlo[j] <= hi; ++j)
-            if ((st = test(c, i, j)) != MK_OK) return st;
+        uint32_t hi = r.qhi[i];
+        for (j = i + 1; j < e && r.qlo[j] <= hi; ++j)
+            if ((st = test(c, r, i, j)) != MK_OK) return st;
     }
     return MK_OK;
 }
@@ -246,17 +326,20 @@ static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
  * before it ends. */
 static mk_status sweep_rows(const sweep_ctx_ *c, int s, int e, int t, int u)
 {
-    const uint32_t *qlo = c->w->qlo, *qhi = c->w->qhi;
+    const rows_ r = rows_of(c->w);
     mk_status st;
     int j;
     while (s < e && t < u) {
-        if (qlo[s] <= qlo[t]) {
-            for (j = t; j < u && qlo[j] <= qhi[s]; ++j)
-                if ((st = test(c, s, j)) != MK_OK) return st;
+        uint32_t ls = r.qlo[s], lt = r.qlo[t];
+        if (ls <= lt) {
+            uint32_t hi = r.qhi[s];
+            for (j = t; j < u && r.qlo[j] <= hi; ++j)
+                if ((st = test(c, r, s, j)) != MK_OK) return st;
             ++s;
         } else {
-            for (j = s; j < e && qlo[j] <= qhi[t]; ++j)
-                if ((st = test(c, j, t)) != MK_OK) return st;
+            uint32_t hi = r.qhi[t];
+            for (j = s; j < e && r.qlo[j] <= hi; ++j)
+                if ((st = test(c, r, j, t)) != MK_OK) return st;
             ++t;
         }
     }
@@ -266,22 +349,16 @@ static mk_status sweep_rows(const sweep_ctx_ *c, int s, int e, int t, int u)
 /* Boxes infinite on the row axis against everything: O(n) each. */
 static mk_status sweep_big(const sweep_ctx_ *c, int n, int nbig)
 {
-    mk_bp *bp = c->bp;
+    const struct mk_sweep *w = c->w;
     int i, j;
     mk_status st;
     for (i = 0; i < nbig; ++i) {
-        uint32_t a = c->w->big[i];
-        const mk_aabb *ba = &bp->box[a];
-        for (j = 0; j < n; ++j) {
-            uint32_t b = c->w->slot[j];
-            if (!mk_bp_overlap_(ba, &c->w->box[j]) || mk_bp_both_static_(bp, a, b)) continue;
-            if ((st = c->report(bp, a, b)) != MK_OK) return st;
-        }
-        for (j = i + 1; j < nbig; ++j) {
-            uint32_t b = c->w->big[j];
-            if (!mk_bp_overlap_(ba, &bp->box[b]) || mk_bp_both_static_(bp, a, b)) continue;
-            if ((st = c->report(bp, a, b)) != MK_OK) return st;
-        }
+        uint32_t a = w->big[i];
+        const mk_aabb *ba = src_box(c->v, a);
+        for (j = 0; j < n; ++j)
+            if (mk_bp_overlap_(ba, &w->box[j]) && (st = emit(c, a, w->slot[j])) != MK_OK) return st;
+        for (j = i + 1; j < nbig; ++j)
+            if (mk_bp_overlap_(ba, src_box(c->v, w->big[j])) && (st = emit(c, a, w->big[j])) != MK_OK) return st;
     }
     return MK_OK;
 }
@@ -307,49 +384,58 @@ static inline uint64_t key_of(const frame_ *f, const mk_aabb *b, uint32_t slot, 
     return (uint64_t)row << 40 | (uint64_t)q << 24 | slot;
 }
 
-/* Every box in the structure, in slot order: keys, and the big ones apart. */
-static int keys_by_slot(mk_bp *bp, const frame_ *f, int *nbig, keying_ *k)
+/* Slot s in key order (`key`) or in the big list, with its key made now. */
+static inline void file_box(struct mk_sweep *w, const src_ *v, uint32_t s, uint64_t *key, int *n, int *nb, keying_ *k)
 {
-    struct mk_sweep *w = bp->sweep;
-    int n = 0;
-    uint32_t s;
-    *nbig = 0;
-    for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
-        const mk_aabb *b = &bp->box[s];
-        if (!in_structure(bp, s)) continue;
-        if (is_big(f, b)) w->big[(*nbig)++] = s;
-        else w->key[n++] = key_of(f, b, s, k);
+    const mk_aabb *b = src_box(v, s);
+    if (is_big(&w->f, b)) w->big[(*nb)++] = s;
+    else key[(*n)++] = key_of(&w->f, b, s, k);
+}
+
+/* Every box in the source, in slot order: keys, and the big ones apart. */
+static int keys_by_slot(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k)
+{
+    /* Locals: the stores to key[] could alias anything read through pointers. */
+    const frame_ f = w->f;
+    const src_ src = *v;
+    uint64_t *key = w->key;
+    uint32_t *big = w->big, s;
+    keying_ kk = *k;
+    int n = 0, nb = 0;
+    for (s = 0; s < src.n; ++s) {
+        const mk_aabb *b = src_box(&src, s);
+        if (!src_in(&src, s)) continue;
+        if (is_big(&f, b)) big[nb++] = s;
+        else key[n++] = key_of(&f, b, s, &kk);
     }
+    *k = kk;
+    *nbig = nb;
     return n;
 }
 
 /* The same keys in the order of the last sweep (key[0, w->n) and the big
  * list of the last sweep): with a coherent scene and the same plan they
- * come out nearly sorted. The last sweep's boxes are the ones in the
- * structure now but for the proxies created or destroyed since (flags
- * NEW and DYING of the dirty list); the new ones go last, after any that
- * stopped being big. tmp holds them meanwhile. */
-static int keys_in_last_order(mk_bp *bp, const frame_ *f, int *nbig, keying_ *k)
+ * come out nearly sorted. The last sweep's boxes are the ones in the source
+ * now but for those added since: proxies created since the last update
+ * (flag NEW in the dirty list), or the caller's boxes past the last count;
+ * the new ones go last, after any that stopped being big. tmp holds them
+ * meanwhile. */
+static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k)
 {
-    struct mk_sweep *w = bp->sweep;
+    mk_bp *bp = v->bp;
     int n = 0, extra = 0, i, nb = 0;
-    for (i = 0; i < w->nbig; ++i) {
-        uint32_t s = w->big[i];
-        if (!in_structure(bp, s)) continue;
-        if (is_big(f, &bp->box[s])) w->big[nb++] = s;
-        else w->tmp[extra++] = key_of(f, &bp->box[s], s, k);
-    }
-    for (i = 0; i < bp->dirty_count; ++i) {
-        uint32_t s = bp->dirty[i];
-        if (!(bp->flags[s] & MK_PF_NEW) || !in_structure(bp, s)) continue;
-        if (is_big(f, &bp->box[s])) w->big[nb++] = s;
-        else w->tmp[extra++] = key_of(f, &bp->box[s], s, k);
+    uint32_t s;
+    for (i = 0; i < w->nbig; ++i)
+        if (src_in(v, w->big[i])) file_box(w, v, w->big[i], w->tmp, &extra, &nb, k);
+    if (v->proxies) {
+        for (i = 0; i < bp->dirty_count; ++i)
+            if ((bp->flags[bp->dirty[i]] & MK_PF_NEW) && src_in(v, bp->dirty[i])) file_box(w, v, bp->dirty[i], w->tmp, &extra, &nb, k);
+    } else {
+        for (s = w->src_n; s < v->n; ++s) file_box(w, v, s, w->tmp, &extra, &nb, k);
     }
     for (i = 0; i < w->n; ++i) {
-        uint32_t s = (uint32_t)(w->key[i] & 0xFFFFFFu);
-        if (!in_structure(bp, s)) continue;
-        if (is_big(f, &bp->box[s])) w->big[nb++] = s;
-        else w->key[n++] = key_of(f, &bp->box[s], s, k);
+        s = (uint32_t)(w->key[i] & 0xFFFFFFu);
+        if (src_in(v, s)) file_box(w, v, s, w->key, &n, &nb, k);
     }
     for (i = 0; i < extra; ++i) w->key[n++] = w->tmp[i];
     *nbig = nb;
@@ -386,32 +472,30 @@ static void insertion_gave_up(struct mk_sweep *w)
 }
 
 /* Sorted keys of the boxes that fit a row, the big ones listed apart, and
- * the per-box arrays the sweep reads. A stateless sweep right after
- * another one (`reuse`) keeps its plan, unless it is old or boxes crowded
- * the ends of its ranges, and starts from its order: an insertion sort,
- * O(n) on a coherent scene, with a radix sort past 4 moves per box (and
- * for a while after one gave up). Any
- * plan is correct as long as no box is taller than its rows; one that
- * meets such a box is remade. */
-static int sort_keys(mk_bp *bp, int reuse, int *nbig)
+ * the per-box arrays the sweep reads. A sweep right after another one of
+ * the same source (`reuse`) keeps its plan, unless it is old or boxes
+ * crowded the ends of its ranges, and starts from its order: an insertion
+ * sort, O(n) on a coherent scene, with a radix sort past 4 moves per box
+ * (and for a while after one gave up). Any plan is correct as long as no
+ * box is taller than its rows; one that meets such a box is remade. */
+static int sort_keys(struct mk_sweep *w, const src_ *v, int reuse, int *nbig)
 {
-    struct mk_sweep *w = bp->sweep;
     frame_ *f = &w->f;
     keying_ k = {0, 0};
-    int n = 0, i, sorted = 0, keep = reuse && w->kept && !w->crowded && w->age < MK_SWEEP_PLAN_AGE_;
+    int n = 0, i, sorted = 0, keep = reuse && !w->crowded && w->age < MK_SWEEP_PLAN_AGE_;
     if (keep && w->sort_wait == 0) {
-        n = keys_in_last_order(bp, f, nbig, &k);
+        n = keys_in_last_order(w, v, nbig, &k);
         if (!k.tall && !(sorted = insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
         if (sorted) w->sort_backoff = 0;
     } else if (keep) { /* the plan without the order: keys in slot order, sequential reads */
         w->sort_wait--;
-        n = keys_by_slot(bp, f, nbig, &k);
+        n = keys_by_slot(w, v, nbig, &k);
     }
     if (!keep || k.tall) {
-        plan(bp, f);
+        plan(v, f);
         k.clamped = 0;
         k.tall = 0;
-        n = keys_by_slot(bp, f, nbig, &k);
+        n = keys_by_slot(w, v, nbig, &k);
         w->age = 0;
     }
     w->age++;
@@ -419,7 +503,7 @@ static int sort_keys(mk_bp *bp, int reuse, int *nbig)
     w->crowded = k.clamped > n / 16 + 16;
     for (i = 0; i < n; ++i) {
         uint32_t s = (uint32_t)(w->key[i] & 0xFFFFFFu);
-        const mk_aabb *b = &bp->box[s];
+        const mk_aabb *b = src_box(v, s);
         w->box[i] = *b;
         w->slot[i] = s;
         w->qlo[i] = (uint32_t)(w->key[i] >> 24) & MK_SWEEP_Q_MAX_;
@@ -428,31 +512,85 @@ static int sort_keys(mk_bp *bp, int reuse, int *nbig)
     return n;
 }
 
-mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b))
+/* The end of the row that starts at i (n when i == n). */
+static int row_end(const struct mk_sweep *w, int i, int n)
 {
-    struct mk_sweep *w;
-    sweep_ctx_ c;
-    int n, nbig, s, e;
+    uint64_t row;
+    if (i == n) return n;
+    row = w->key[i] >> 40;
+    for (++i; i < n && w->key[i] >> 40 == row; ++i) {}
+    return i;
+}
+
+/* One sweep of the source's boxes, kept (KEPT_*) for the next sweep of the
+ * same kind; the pairs go to c->report or stay in w->out. */
+static mk_status run(const sweep_ctx_ *c, int kind, int reuse)
+{
+    struct mk_sweep *w = c->w;
+    int n, nbig, s, e, u;
     mk_status st;
-    if (!bp->sweep && (st = sweep_create(bp)) != MK_OK) return st;
-    w = bp->sweep;
-    /* The arrays describe the last sweep only if the last update was one. */
-    n = sort_keys(bp, bp->swept, &nbig);
+    n = sort_keys(w, c->v, reuse && w->kept == kind, &nbig);
     w->n = n;
     w->nbig = nbig;
-    w->kept = 0;
-    c.bp = bp; c.w = w; c.report = report;
-    for (s = 0; s < n; s = e) {
+    w->src_n = c->v->n;
+    w->kept = KEPT_NONE;
+    w->nout = 0;
+    for (s = 0, e = row_end(w, 0, n); s < n; s = e, e = u) {
         uint64_t row = w->key[s] >> 40;
-        int u;
-        for (e = s + 1; e < n && w->key[e] >> 40 == row; ++e) {}
-        if ((st = sweep_row(&c, s, e)) != MK_OK) return st;
-        if (e == n || w->key[e] >> 40 != row + 1) continue;
-        for (u = e + 1; u < n && w->key[u] >> 40 == row + 1; ++u) {}
-        if ((st = sweep_rows(&c, s, e, e, u)) != MK_OK) return st;
+        u = row_end(w, e, n);
+        if ((st = sweep_row(c, s, e)) != MK_OK) return st;
+        if (e < n && w->key[e] >> 40 == row + 1 && (st = sweep_rows(c, s, e, e, u)) != MK_OK) return st;
     }
-    if ((st = sweep_big(&c, n, nbig)) != MK_OK) return st;
-    w->kept = 1;
+    if ((st = sweep_big(c, n, nbig)) != MK_OK) return st;
+    w->kept = kind;
+    return MK_OK;
+}
+
+static mk_status ensure(mk_bp *bp)
+{
+    return bp->sweep ? MK_OK : sweep_create(bp);
+}
+
+static src_ proxies_of(mk_bp *bp)
+{
+    src_ v;
+    v.bp = bp;
+    v.proxies = 1;
+    v.base = (const char *)bp->box;
+    v.stride = sizeof *bp->box;
+    v.n = (uint32_t)bp->hi_slot;
+    return v;
+}
+
+mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b))
+{
+    sweep_ctx_ c;
+    src_ v;
+    mk_status st;
+    if ((st = ensure(bp)) != MK_OK) return st;
+    v = proxies_of(bp);
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = report;
+    /* The arrays describe the last sweep only if the last update was one. */
+    return run(&c, KEPT_PROXIES, bp->swept);
+}
+
+mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n, const mk_bp_pair **pairs, int *count)
+{
+    sweep_ctx_ c;
+    src_ v;
+    mk_status st;
+    *pairs = NULL;
+    *count = 0;
+    if ((st = ensure(bp)) != MK_OK) return st;
+    v.bp = bp;
+    v.proxies = 0;
+    v.base = (const char *)boxes;
+    v.stride = stride;
+    v.n = (uint32_t)n;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = NULL;
+    if ((st = run(&c, KEPT_BOXES, 1)) != MK_OK) return st;
+    *pairs = c.w->out;
+    *count = c.w->nout;
     return MK_OK;
 }
 
@@ -478,13 +616,15 @@ mk_status mk_sweep_count_(mk_bp *bp, double *tests)
     struct mk_sweep *w;
     int n, nbig, s, e, u, i;
     double t = 0;
+    src_ v;
     mk_status st;
-    if (!bp->sweep && (st = sweep_create(bp)) != MK_OK) return st;
+    if ((st = ensure(bp)) != MK_OK) return st;
     w = bp->sweep;
-    n = sort_keys(bp, 0, &nbig);
+    v = proxies_of(bp);
+    n = sort_keys(w, &v, 0, &nbig);
     w->n = 0; /* the arrays no longer describe a finished sweep */
     w->nbig = 0;
-    w->kept = 0;
+    w->kept = KEPT_NONE;
     for (s = 0; s < n; s = e) {
         uint64_t row = w->key[s] >> 40;
         for (e = s + 1; e < n && w->key[e] >> 40 == row; ++e) {}

@@ -283,6 +283,26 @@ mk_status mk_bp_move_proxies(mk_bp *bp, const mk_bp_id *ids, size_t id_stride, c
     return st;
 }
 
+mk_status mk_bp_sweep_boxes(mk_bp *bp, const mk_aabb *boxes, size_t box_stride, int n, const mk_bp_pair **pairs, int *count)
+{
+    const char *pb = (const char *)boxes;
+    mk_status st;
+    int i;
+    if (pairs) *pairs = NULL;
+    if (count) *count = 0;
+    if (!bp || !pairs || !count) return MK_ERR_NULL;
+    if (n < 0) return MK_ERR_BAD_SIZE;
+    if (n > bp->cap) return MK_ERR_CAPACITY;
+    if (bp->hi_slot) return MK_ERR_BAD_ARGUMENT; /* a broadphase of proxies: their sweep is mk_bp_update's */
+    if (n == 0) return MK_OK;
+    if (!boxes) return MK_ERR_NULL;
+    if (!box_stride) box_stride = sizeof *boxes;
+    if ((uintptr_t)boxes % ALIGN_BOX_ || box_stride % ALIGN_BOX_) return MK_ERR_BAD_ARGUMENT;
+    for (i = 0; i < n; ++i, pb += box_stride)
+        if ((st = check_box((const mk_aabb *)(const void *)pb)) != MK_OK) return st;
+    return mk_sweep_boxes_(bp, boxes, box_stride, n, pairs, count);
+}
+
 mk_status mk_bp_set_filter(mk_bp *bp, mk_bp_id id, uint64_t cat, uint64_t mask)
 {
     int s;

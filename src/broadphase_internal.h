@@ -159,6 +159,9 @@ void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte);
  * update answered by a sweep (bp->swept), the sort starts from that
  * sweep's order (an insertion sort, O(n) on a coherent scene). */
 mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b));
+/* The same over a caller's boxes (mk_bp_sweep_boxes, checked there): the
+ * pairs of indices, a < b, in the sweep's scratch (grown by doubling). */
+mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n, const mk_bp_pair **pairs, int *count);
 void mk_sweep_destroy_(mk_bp *bp);
 /* The AABB tests mk_sweep_pairs_ would make on the boxes in box[], counted
  * in O(n log n) without making them (AUTO's crowding statistic). Leaves no

@@ -544,54 +544,50 @@ typedef struct box_vert {
 
 /* One Sutherland-Hodgman pass (clip_polygon's, with its slop rule) against
  * reference side q: keeps the part of src where sign * c[axis] - h <= slop.
- * Returns -1 when nothing is outside. */
+ * One loop: each vertex's distance is found once, as the end of the edge
+ * before it; a pass that cuts nothing copies the polygon (the caller skips
+ * the sides no corner is outside of). */
 static int clip_box_side(int face, int q, mk_feature finc_face, mk_real sign, int axis, mk_real h, mk_real slop, const box_vert *src,
                          int n, box_vert *dst)
 {
-    mk_real dist[MK_MF_MAX];
-    int m = 0, i, outside = 0;
+    int m = 0, i;
+    mk_real da = sign * src[0].c[axis] - h;
     for (i = 0; i < n; ++i) {
-        dist[i] = sign * src[i].c[axis] - h;
-        outside += !(dist[i] <= slop);
-    }
-    if (outside == 0) return -1;
-    for (i = 0; i < n; ++i) {
-        int j = i + 1 < n ? i + 1 : 0;
-        const box_vert *a = &src[i], *b = &src[j];
-        mk_real da = dist[i], db = dist[j];
+        const box_vert *a = &src[i], *b = &src[i + 1 < n ? i + 1 : 0];
+        mk_real db = sign * b->c[axis] - h;
         int ina = da <= slop, inb = db <= slop;
         if (ina) dst[m++] = *a;
-        if (ina == inb) continue;
-        if ((ina ? da : db) > 0) { /* the inside end stands for the crossing (clip_polygon) */
-            if (ina) {
-                dst[m - 1].ref_edge = (signed char)q;
-                dst[m - 1].edge = E(box_face_edge[face][q]);
-            }
-            continue;
-        }
-        {
-            box_vert *x = &dst[m++];
-            mk_real t = da / (da - db);
-            x->c[0] = a->c[0] + (b->c[0] - a->c[0]) * t;
-            x->c[1] = a->c[1] + (b->c[1] - a->c[1]) * t;
-            x->c[2] = a->c[2] + (b->c[2] - a->c[2]) * t;
-            if (a->ref_edge < 0) {
-                x->fref = E(box_face_edge[face][q]);
-                x->finc = a->edge;
+        if (ina != inb) {
+            if ((ina ? da : db) > 0) { /* the inside end stands for the crossing (clip_polygon) */
+                if (ina) {
+                    dst[m - 1].ref_edge = (signed char)q;
+                    dst[m - 1].edge = E(box_face_edge[face][q]);
+                }
             } else {
-                /* Along reference side pe and now crossing side q: the corner between them. */
-                int pe = a->ref_edge;
-                x->fref = pe == ((q + 3) & 3) ? V(box_face_corner[face][q]) : pe == ((q + 1) & 3) ? V(box_face_corner[face][(q + 1) & 3]) : F(face);
-                x->finc = finc_face;
-            }
-            if (ina) { /* leaving: the next edge runs along side q */
-                x->ref_edge = (signed char)q;
-                x->edge = E(box_face_edge[face][q]);
-            } else { /* entering: the rest of a's edge */
-                x->ref_edge = a->ref_edge;
-                x->edge = a->edge;
+                box_vert *x = &dst[m++];
+                mk_real t = da / (da - db);
+                x->c[0] = a->c[0] + (b->c[0] - a->c[0]) * t;
+                x->c[1] = a->c[1] + (b->c[1] - a->c[1]) * t;
+                x->c[2] = a->c[2] + (b->c[2] - a->c[2]) * t;
+                if (a->ref_edge < 0) {
+                    x->fref = E(box_face_edge[face][q]);
+                    x->finc = a->edge;
+                } else {
+                    /* Along reference side pe and now crossing side q: the corner between them. */
+                    int pe = a->ref_edge;
+                    x->fref = pe == ((q + 3) & 3) ? V(box_face_corner[face][q]) : pe == ((q + 1) & 3) ? V(box_face_corner[face][(q + 1) & 3]) : F(face);
+                    x->finc = finc_face;
+                }
+                if (ina) { /* leaving: the next edge runs along side q */
+                    x->ref_edge = (signed char)q;
+                    x->edge = E(box_face_edge[face][q]);
+                } else { /* entering: the rest of a's edge */
+                    x->ref_edge = a->ref_edge;
+                    x->edge = a->edge;
+                }
             }
         }
+        da = db;
     }
     return m;
 }
@@ -634,8 +630,9 @@ static void emit_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_re
 void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce)
 {
     const mk_shape *ref = ref_is_a ? p->a : p->b, *inc = ref_is_a ? p->b : p->a;
-    mk_vec3 h = ref->u.half_extents, g = inc->u.half_extents, n = m->normal, d, col[3], tri, c0, cu, cv;
-    mk_real hh[3], gg[3], dd[3];
+    mk_vec3 h = ref->u.half_extents, g = inc->u.half_extents, n = m->normal, d, col[3], tri, c0, cu, cv, s, t, corner[4];
+    mk_vec3 lo = mk_v3(MK_REAL_MAX, MK_REAL_MAX, MK_REAL_MAX), hi = mk_v3_neg(lo);
+    mk_real hh[3], gg[3], dd[3], lh[2][3];
     box_vert buf[2][MK_MF_MAX];
     int fi, ia, iu, iv, i, q, cnt = 4, cur = 0;
     mk_real slop = m->cores_apart && ra + rb > 0 ? 0 : m->slop;
@@ -664,23 +661,36 @@ void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_rea
     c0 = mk_v3_mad(tri, fi & 1 ? gg[ia] : -gg[ia], col[ia]);
     cu = mk_v3_scale(col[iu], gg[iu]);
     cv = mk_v3_scale(col[iv], gg[iv]);
+    /* The corners c0 -+ cu -+ cv in box_face_corner's order: (-, -), (+, -),
+     * (+, +), (-, +) on a + face, reversed on a - face. */
+    s = mk_v3_add(cu, cv), t = mk_v3_sub(cu, cv);
+    corner[0] = mk_v3_sub(c0, s), corner[1] = mk_v3_add(c0, t), corner[2] = mk_v3_add(c0, s), corner[3] = mk_v3_sub(c0, t);
     for (i = 0; i < 4; ++i) {
-        int c = box_face_corner[fi][i];
         box_vert *x = &buf[0][i];
-        mk_vec3 v = mk_v3_add(c0, mk_v3_add((c >> iu) & 1 ? cu : mk_v3_neg(cu), (c >> iv) & 1 ? cv : mk_v3_neg(cv)));
+        mk_vec3 v = corner[fi & 1 ? i : 3 - i];
         x->c[0] = v.x, x->c[1] = v.y, x->c[2] = v.z;
         x->fref = F(face);
-        x->finc = V(c);
+        x->finc = V(box_face_corner[fi][i]);
         x->ref_edge = -1;
         x->edge = E(box_face_edge[fi][i]);
     }
     /* The reference face's sides in its corner order; the slop is
-     * side_planes()' for a face, m->slop times the side's length. */
+     * side_planes()' for a face, m->slop times the side's length. A side
+     * that no corner is outside of cuts nothing, and no crossing made by
+     * another side (a point between two corners) is outside it either: its
+     * pass is skipped. */
+    for (i = 0; i < 4; ++i) {
+        const box_vert *x = &buf[0][i];
+        lo = mk_v3(mk_min(lo.x, x->c[0]), mk_min(lo.y, x->c[1]), mk_min(lo.z, x->c[2]));
+        hi = mk_v3(mk_max(hi.x, x->c[0]), mk_max(hi.y, x->c[1]), mk_max(hi.z, x->c[2]));
+    }
+    lh[0][0] = -lo.x, lh[0][1] = -lo.y, lh[0][2] = -lo.z;
+    lh[1][0] = hi.x, lh[1][1] = hi.y, lh[1][2] = hi.z;
     for (q = 0; q < 4 && cnt > 0; ++q) {
         const signed char *sd = box_face_side[face][q];
-        int r = clip_box_side(face, q, finc_face, sd[1], sd[0], hh[sd[0]], 2 * slop * hh[sd[2]], buf[cur], cnt,
-                              buf[cur ^ 1]);
-        if (r >= 0) cnt = r, cur ^= 1;
+        mk_real side_slop = 2 * slop * hh[sd[2]];
+        if (!(lh[sd[1] > 0][sd[0]] - hh[sd[0]] <= side_slop))
+            cnt = clip_box_side(face, q, finc_face, sd[1], sd[0], hh[sd[0]], side_slop, buf[cur], cnt, buf[cur ^ 1]), cur ^= 1;
     }
     emit_boxes(m, p, ref_is_a, face, ra, rb, reduce, buf[cur], cnt);
 }

@@ -492,6 +492,18 @@ MK_ALWAYS_INLINE void spheres(const mk_shape *a, mk_vec3 pa, const mk_shape *b, 
     put(l - a->radius - b->radius, n, mk_v3_mad(pa, a->radius, n), 0, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
 }
 
+/* The answer of box_sphere for a sphere centre at a gap of length l > 0
+ * from the box core along v (box frame), s = 1 / |v|. Only the gap is
+ * rotated back: the box point is the sphere's centre less the gap (pb - R v,
+ * not R q + pa), so A's witness is pb less (l - radius) along n: one
+ * rotation fewer on the critical chain. */
+MK_ALWAYS_INLINE void box_sphere_gap(const mk_shape *a, const mk_mat3 *ra, const mk_shape *b, const mk_vec3 *pb, mk_vec3 v, mk_real l,
+                                     mk_real s, int flip, mk_distance_result *r)
+{
+    mk_vec3 n = mk_v3_scale(mk_mat3_mul_v3(*ra, v), s);
+    put(l - a->radius - b->radius, n, mk_v3_mad(*pb, a->radius - l, n), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+}
+
 /* box_sphere with the sphere's centre inside the box core: it leaves
  * through the nearest face. Out of line, so that the common case keeps the
  * rotation in registers. */
@@ -505,21 +517,39 @@ static MK_NOINLINE void box_sphere_inside(const mk_shape *a, const mk_mat3 *ra, 
         MK_SOLVE_CONVERGED, r);
 }
 
+/* box_sphere with a gap too small for 1 / |v|^2 (below 1 / MK_REAL_MAX):
+ * |v|^2 is subnormal there and has lost most of its bits, and 1 / |v| may
+ * overflow, so the direction and length come from u = v / m, m the largest
+ * component (|u| in [1, sqrt 3], |v| = m |u|). Out of line for the same
+ * reason. */
+static MK_NOINLINE void box_sphere_tiny_gap(const mk_shape *a, const mk_mat3 *ra, const mk_vec3 *pa, const mk_shape *b,
+                                            const mk_vec3 *pb, int flip, mk_distance_result *r)
+{
+    mk_vec3 c = mk_mat3_tmul_v3(*ra, mk_v3_sub(*pb, *pa)), v = mk_v3_sub(c, mk_box_clamp(a->u.half_extents, c));
+    mk_real m = mk_v3_max_abs(v), lu;
+    mk_vec3 u = mk_v3(v.x / m, v.y / m, v.z / m);
+    lu = mk_sqrt_(mk_v3_len2(u));
+    box_sphere_gap(a, ra, b, pb, u, m * lu, 1 / lu, flip, r);
+}
+
+/* mk_closest_box_sphere's steps, answered in world space. |v|^2 cannot
+ * overflow (validated positions and sizes keep it below ~1e152 in double,
+ * ~1e17 in float), so one test of its lower end guards 1 / |v| = |v| *
+ * (1 / |v|^2), whose division need not wait for the square root; the test
+ * also sends a centre inside the core (v = 0) out of line. */
 MK_ALWAYS_INLINE void box_sphere(const mk_shape *a, const mk_mat3 *ra, const mk_vec3 *pa, const mk_shape *b, const mk_vec3 *pb,
                                  int flip, mk_distance_result *r)
 {
-    /* mk_closest_box_sphere's steps, answered in world space. Only the gap v
-     * is rotated back: the box point is the sphere's centre less the gap
-     * (pb - R v, not R q + pa), so A's witness is pb less (l - radius) along
-     * n: one rotation fewer on the critical chain. */
-    mk_vec3 h = a->u.half_extents, c = mk_mat3_tmul_v3(*ra, mk_v3_sub(*pb, *pa)), v = mk_v3_sub(c, mk_box_clamp(h, c)), n;
-    mk_real l, s = mk_inv_len(mk_v3_len2(v), &l);
-    if (!(l > 0)) {
-        box_sphere_inside(a, ra, pa, b, pb, flip, r);
+    mk_vec3 h = a->u.half_extents, c = mk_mat3_tmul_v3(*ra, mk_v3_sub(*pb, *pa)), v = mk_v3_sub(c, mk_box_clamp(h, c));
+    mk_real l2 = mk_v3_len2(v), l;
+    if (!(l2 >= 1 / MK_REAL_MAX)) {
+        /* v != 0, not l2 > 0: a gap below ~1e-162 (~4e-23 in float) squares to 0. */
+        if (mk_v3_max_abs(v) > 0) box_sphere_tiny_gap(a, ra, pa, b, pb, flip, r);
+        else box_sphere_inside(a, ra, pa, b, pb, flip, r);
         return;
     }
-    n = mk_v3_scale(mk_mat3_mul_v3(*ra, v), s);
-    put(l - a->radius - b->radius, n, mk_v3_mad(*pb, a->radius - l, n), flip, 0, MK_METHOD_CLOSED_FORM, MK_SOLVE_CONVERGED, r);
+    l = mk_sqrt_(l2);
+    box_sphere_gap(a, ra, b, pb, v, l, l * (1 / l2), flip, r);
 }
 
 /* ua: the capsule's axis (its z axis in world). */

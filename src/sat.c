@@ -454,7 +454,7 @@ static void ctx_init(sat_ctx *c, const mk_mat3 *R, mk_vec3 t, const mk_sat_optio
  * demos/bullet_scenes' 10-box tower drift 0.72 m against 0.37 m native
  * (0.27 m with the better face and the exact clip of MK_MANIFOLD_BEST_FACE),
  * hence the choice per pair. */
-static mk_sat_kind choose(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *out)
+MK_ALWAYS_INLINE mk_sat_kind choose(const sat_ctx *c, const mk_sat_options *opt, mk_sat_result *out)
 {
     const sat_axis *pick = &c->face_a;
     mk_sat_kind kind = MK_SAT_FACE_A;

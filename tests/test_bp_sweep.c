@@ -5,7 +5,9 @@
  * set is exactly the brute-force set and that the sweep answered. Touching
  * boxes (closed intervals: a shared face, edge or corner is an overlap) are
  * built on exact binary lattices, where any rounding in the sweep's
- * quantised keys or rows would lose a pair. */
+ * quantised keys or rows would lose a pair. Every frame also goes through
+ * mk_bp_sweep_boxes (the same sweep over the scene's own box array, no
+ * proxies, no statics) on a second broadphase, against the same oracle. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -19,7 +21,7 @@ typedef struct scene {
     mk_aabb box[MAXN];
     int is_static[MAXN];
     mk_bp_id id[MAXN];
-    mk_bp *bp;
+    mk_bp *bp, *boxes_bp; /* proxies; mk_bp_sweep_boxes over box[] */
     int frames, sweeps_before;
     mk_bp_pair got[1 << 16], want[1 << 16];
 } scene;
@@ -39,6 +41,15 @@ static void scene_init(scene *s)
     d.pairs_only = 1;
     d.proxy_capacity = MAXN;
     MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &s->bp), MK_OK);
+    d = mk_bp_default_def();
+    d.proxy_capacity = MAXN;
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &s->boxes_bp), MK_OK);
+}
+
+static void scene_free(scene *s)
+{
+    mk_bp_destroy(s->bp);
+    mk_bp_destroy(s->boxes_bp);
 }
 
 static void add(scene *s, mk_aabb b, int is_static)
@@ -68,13 +79,14 @@ static void move(scene *s, int i, mk_aabb b)
     MK_ASSERT_STATUS(mk_bp_move_proxy(s->bp, s->id[i], b), MK_OK);
 }
 
-/* Brute force over the scene's boxes, as object-index pairs. */
-static int oracle(scene *s)
+/* Brute force over the scene's boxes, as object-index pairs (static-static
+ * pairs too, unless `statics` says they are left out). */
+static int oracle(scene *s, int statics)
 {
     int i, j, n = 0;
     for (i = 0; i < s->n; ++i)
         for (j = i + 1; j < s->n; ++j) {
-            if ((s->is_static[i] && s->is_static[j]) || !mk_aabb_overlap(s->box[i], s->box[j])) continue;
+            if ((statics && s->is_static[i] && s->is_static[j]) || !mk_aabb_overlap(s->box[i], s->box[j])) continue;
             ck_assert_int_lt(n, 1 << 16);
             s->want[n].a = (mk_bp_id)i;
             s->want[n].b = (mk_bp_id)j;
@@ -90,8 +102,36 @@ static int query_count_cb(void *ctx, mk_bp_id id, void *user)
     return 1;
 }
 
+/* got[0, n) sorted against the oracle's want[0, nw). */
+static void same_as_oracle(const scene *s, int n, int nw, const char *what)
+{
+    int i;
+    for (i = 0; i < n && i < nw; ++i)
+        ck_assert_msg(s->got[i].a == s->want[i].a && s->got[i].b == s->want[i].b,
+                      "%s, frame %d: pair %d is (%u, %u), brute force has (%u, %u)", what, s->frames, i, s->got[i].a,
+                      s->got[i].b, s->want[i].a, s->want[i].b);
+    ck_assert_msg(n == nw, "%s, frame %d: %d pairs, brute force %d", what, s->frames, n, nw);
+}
+
+/* mk_bp_sweep_boxes over the scene's array: each pair once, a < b, every
+ * overlapping pair (statics are plain boxes there). */
+static void check_boxes(scene *s)
+{
+    const mk_bp_pair *p;
+    int np, i;
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(s->boxes_bp, s->box, 0, s->n, &p, &np), MK_OK);
+    ck_assert_int_le(np, 1 << 16);
+    for (i = 0; i < np; ++i) {
+        ck_assert_msg(p[i].a < p[i].b && p[i].b < (mk_bp_id)s->n, "pair %d is (%u, %u)", i, p[i].a, p[i].b);
+        s->got[i] = p[i];
+    }
+    qsort(s->got, (size_t)np, sizeof *s->got, pair_cmp);
+    same_as_oracle(s, np, oracle(s, 0), "mk_bp_sweep_boxes");
+}
+
 /* One update: the set equals the oracle's, the update was a sweep, and a
- * region query (read from the sweep's rows) finds what brute force finds. */
+ * region query (read from the sweep's rows) finds what brute force finds;
+ * then the same boxes through mk_bp_sweep_boxes. */
 static void check_frame(scene *s, mk_aabb q)
 {
     const mk_bp_pair *p;
@@ -110,15 +150,12 @@ static void check_frame(scene *s, mk_aabb q)
         s->got[i].b = a < b ? b : a;
     }
     qsort(s->got, (size_t)np, sizeof *s->got, pair_cmp);
-    nw = oracle(s);
-    for (i = 0; i < np && i < nw; ++i)
-        ck_assert_msg(s->got[i].a == s->want[i].a && s->got[i].b == s->want[i].b,
-                      "frame %d: pair %d is (%u, %u), brute force has (%u, %u)", s->frames, i, s->got[i].a, s->got[i].b,
-                      s->want[i].a, s->want[i].b);
-    ck_assert_msg(np == nw, "frame %d: %d pairs, brute force %d", s->frames, np, nw);
+    nw = oracle(s, 1);
+    same_as_oracle(s, np, nw, "pairs_only update");
     MK_ASSERT_STATUS(mk_bp_query_aabb(s->bp, q, query_count_cb, &found), MK_OK);
     for (i = 0; i < s->n; ++i) truth += mk_aabb_overlap(s->box[i], q);
     ck_assert_int_eq(found, truth);
+    check_boxes(s);
     s->frames++;
 }
 
@@ -154,7 +191,7 @@ START_TEST(coherent)
             if (!s.is_static[i]) move(&s, i, shifted(s.box[i], vel[i]));
         check_frame(&s, random_box(&r, 20, 1, 4));
     }
-    mk_bp_destroy(s.bp);
+    scene_free(&s);
 }
 END_TEST
 
@@ -173,7 +210,7 @@ START_TEST(teleporting)
         }
         check_frame(&s, random_box(&r, 16, 1, 5));
     }
-    mk_bp_destroy(s.bp);
+    scene_free(&s);
 }
 END_TEST
 
@@ -207,7 +244,7 @@ START_TEST(touching)
         for (i = 0; i < s.n; ++i) move(&s, i, shifted(s.box[i], d));
         check_frame(&s, mk_aabb_make(mk_v3(2, 2, 1), mk_v3(3, 3, 2)));
     }
-    mk_bp_destroy(s.bp);
+    scene_free(&s);
 }
 END_TEST
 
@@ -234,7 +271,7 @@ START_TEST(churn)
         if (f == 20) move(&s, 9, mk_aabb_make(mk_v3(4, 4, 4), mk_v3(12, 12, 12))); /* taller than the rows */
         check_frame(&s, random_box(&r, 20, 2, 6));
     }
-    mk_bp_destroy(s.bp);
+    scene_free(&s);
 }
 END_TEST
 
@@ -252,7 +289,100 @@ START_TEST(all_equal)
             if (!s.is_static[i]) move(&s, i, f % 2 ? mk_aabb_make(p, p) : mk_aabb_make(p, mk_v3_add(p, mk_v3(1, 1, 1))));
         check_frame(&s, mk_aabb_make(p, p));
     }
-    mk_bp_destroy(s.bp);
+    scene_free(&s);
+}
+END_TEST
+
+/* mk_bp_sweep_boxes reads boxes through a stride (here inside host
+ * records), follows the array as it grows and shrinks between calls, and
+ * gives the same pairs in the same order for the same calls. */
+typedef struct host_rec { int tag; mk_aabb box; double pad; } host_rec;
+
+START_TEST(boxes_stride_and_order)
+{
+    static host_rec rec[300];
+    mk_bp *a, *b;
+    mk_bp_def d = mk_bp_default_def();
+    const mk_bp_pair *p, *q;
+    mk_rng r = {15};
+    int i, f, n = 200, np, nq;
+    d.proxy_capacity = 300;
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &a), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &b), MK_OK);
+    for (i = 0; i < 300; ++i) rec[i].box = random_box(&r, 12, 0.3, 2.0);
+    for (f = 0; f < 12; ++f) {
+        int brute = 0, j;
+        n = f % 3 == 2 ? n - 37 : n + 11;
+        for (i = 0; i < n; ++i) rec[i].box = shifted(rec[i].box, mk_v3_scale(mk_rng_dir(&r), (mk_real)0.3));
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(a, &rec[0].box, sizeof *rec, n, &p, &np), MK_OK);
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(b, &rec[0].box, sizeof *rec, n, &q, &nq), MK_OK);
+        ck_assert_int_eq(np, nq);
+        ck_assert_msg(np == 0 || !memcmp(p, q, (size_t)np * sizeof *p), "frame %d: same calls, other order", f);
+        for (i = 0; i < n; ++i)
+            for (j = i + 1; j < n; ++j) brute += mk_aabb_overlap(rec[i].box, rec[j].box);
+        ck_assert_int_eq(np, brute);
+        for (i = 0; i < np; ++i) ck_assert(p[i].a < p[i].b && p[i].b < (mk_bp_id)n && mk_aabb_overlap(rec[p[i].a].box, rec[p[i].b].box));
+    }
+    mk_bp_destroy(a);
+    mk_bp_destroy(b);
+}
+END_TEST
+
+/* Bad input: a clear status, *pairs NULL and *count 0, nothing changed. */
+START_TEST(boxes_errors)
+{
+    mk_bp *bp, *px, *fixed;
+    mk_bp_def d = mk_bp_default_def();
+    mk_aabb box[50];
+    const mk_bp_pair *p = (const mk_bp_pair *)box;
+    int i, np = 7;
+    mk_bp_id id;
+    d.proxy_capacity = 50;
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &bp), MK_OK);
+    for (i = 0; i < 50; ++i) box[i] = mk_aabb_make(mk_v3(0, 0, 0), mk_v3(1, 1, 1)); /* all overlap */
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(NULL, box, 0, 4, &p, &np), MK_ERR_NULL);
+    ck_assert(p == NULL && np == 0);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, NULL, 0, 4, &p, &np), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, NULL, &np), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, NULL), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, -1, &p, &np), MK_ERR_BAD_SIZE);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 51, &p, &np), MK_ERR_CAPACITY);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 3, 4, &p, &np), MK_ERR_BAD_ARGUMENT); /* misaligned stride */
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, (const mk_aabb *)(const void *)((const char *)box + 1), 0, 4, &p, &np),
+                     MK_ERR_BAD_ARGUMENT);
+    box[3].lo.y = (mk_real)NAN;
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, &np), MK_ERR_BAD_AABB);
+    box[3] = mk_aabb_make(mk_v3(0, 2, 0), mk_v3(1, 1, 1)); /* lo > hi */
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, &np), MK_ERR_BAD_AABB);
+    box[3] = mk_aabb_make(mk_v3((mk_real)INFINITY, 0, 0), mk_v3((mk_real)INFINITY, 1, 1)); /* lo = +inf */
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, &np), MK_ERR_BAD_AABB);
+    ck_assert(p == NULL && np == 0);
+    box[3] = mk_aabb_make(mk_v3(0, 0, 0), mk_v3(1, 1, 1));
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 0, &p, &np), MK_OK);
+    ck_assert_int_eq(np, 0);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 50, &p, &np), MK_OK); /* 1225 pairs: the array grows */
+    ck_assert_int_eq(np, 1225);
+    /* A broadphase of proxies refuses: its sweep is mk_bp_update's. */
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &px), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_create_proxy(px, box[0], NULL, ~0ull, ~0ull, 0, &id), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(px, box, 0, 4, &p, &np), MK_ERR_BAD_ARGUMENT);
+    /* fixed_capacity: the pair array does not grow past pair_capacity (it
+     * starts at 1024 pairs); then MK_ERR_CAPACITY. */
+    d.fixed_capacity = 1;
+    d.pair_capacity = 2000;
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &fixed), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(fixed, box, 0, 50, &p, &np), MK_OK);
+    ck_assert_int_eq(np, 1225);
+    mk_bp_destroy(fixed);
+    d.pair_capacity = 1000;
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &fixed), MK_OK);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(fixed, box, 0, 45, &p, &np), MK_OK); /* 990 */
+    ck_assert_int_eq(np, 990);
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(fixed, box, 0, 50, &p, &np), MK_ERR_CAPACITY);
+    ck_assert(p == NULL && np == 0);
+    mk_bp_destroy(fixed);
+    mk_bp_destroy(px);
+    mk_bp_destroy(bp);
 }
 END_TEST
 
@@ -266,6 +396,8 @@ int main(void)
     tcase_add_test(tc, touching);
     tcase_add_test(tc, churn);
     tcase_add_test(tc, all_equal);
+    tcase_add_test(tc, boxes_stride_and_order);
+    tcase_add_test(tc, boxes_errors);
     suite_add_tcase(su, tc);
     return mk_test_run(su);
 }

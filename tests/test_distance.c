@@ -118,6 +118,28 @@ START_TEST(sphere_box_analytic)
     r = dist_ok(&box, xfq(mk_v3(10, 0, 0), q), &s, xfq(mk_v3_add(mk_v3(10, 0, 0), mk_quat_rotate(q, mk_v3(3, 1, 1))), q));
     MK_ASSERT_NEAR(r.distance, 1.5, 8 * TOL);
     MK_ASSERT_V3_NEAR(r.normal, mk_quat_rotate(q, mk_v3(1, 0, 0)), 8 * TOL);
+    /* Gaps g with g^2 below 1 / MK_REAL_MAX = 2^-E (box_sphere's out-of-line
+     * path): g^2 subnormal, g^2 rounding to 0, and g so small that 1 / g
+     * overflows too. Powers of two keep the inputs exact; the distance keeps
+     * full relative precision and the normal stays exact. */
+    {
+        int e = sizeof(mk_real) == sizeof(double) ? 1024 : 128, ex[3], k;
+        mk_shape tiny_box, tiny_s;
+        ex[0] = -(e / 2 + 8);
+        ex[1] = -(e / 2 + 40);
+        ex[2] = -(e + 4);
+        for (k = 0; k < 3; ++k) {
+            mk_real g = (mk_real)ldexp(1.0, ex[k]);
+            ck_assert(g * g < 1 / MK_REAL_MAX && g > 0);
+            mk_shape_box(mk_v3(4 * g, 4 * g, 4 * g), 0, &tiny_box);
+            mk_shape_sphere(2 * g, &tiny_s);
+            r = dist_ok(&tiny_box, xf(0, 0, 0), &tiny_s, xf(12 * g, 2 * g, 0));
+            MK_ASSERT_NEAR(r.distance / g, 6, 8 * TOL);
+            MK_ASSERT_V3_NEAR(r.normal, mk_v3(1, 0, 0), 0);
+            MK_ASSERT_NEAR(r.point_a.x / g, 4, 8 * TOL);
+            MK_ASSERT_NEAR(r.point_b.x / g, 10, 8 * TOL);
+        }
+    }
 }
 END_TEST
 

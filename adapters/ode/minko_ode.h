@@ -6,9 +6,10 @@
  * size skipped, same non-null body skipped, category/collide bits OR-ed both
  * ways, closed AABB overlap tested on ODE's own dReal AABBs; sub-spaces
  * passed to the callback as geoms; dSpaceCollide2's space/geom/sublevel
- * rules and argument order), each pair once, in a deterministic order. A
- * persistent Minko broadphase per space, keyed by dGeomID, is brought up to
- * date from the space's geoms on every call, so geoms may be created, moved,
+ * rules and argument order), each pair once, in a deterministic order. Per
+ * space, persistent records keyed by dGeomID and a Minko broadphase (its
+ * sweep's plan and last order) are brought up to date from the space's
+ * geoms on every call, so geoms may be created, moved,
  * disabled and destroyed freely between calls, and a destroyed geom's
  * address reused by a new geom is harmless. The space may be of any kind; a
  * dSimpleSpace is the cheapest container (the others do upkeep of their
@@ -51,10 +52,12 @@
  * space being collided.
  *
  * Complexity: mk_ode_space_collide is O(n) to read the n geoms' AABBs plus
- * the Minko broadphase update (O(n + moving endpoints) for coherent motion)
+ * Minko's set-only sweep of them (mk_bp_sweep_boxes: one sort of n keys, O(n)
+ * when the scene is coherent, plus the boxes each box meets in its rows)
  * plus O(p) for p reported pairs; ODE's dHashSpace rebuilds its grid and an
- * n*n bit matrix on every call. mk_ode_space_collide2 against a space is one
- * such update plus a region query per geom on the other side.
+ * n*n bit matrix on every call. mk_ode_space_collide2 against a space reads
+ * its AABBs likewise and then, like ODE's own spaces, tests each geom on the
+ * other side against every geom of the space: O(n) per geom.
  */
 #ifndef MINKO_ODE_H
 #define MINKO_ODE_H

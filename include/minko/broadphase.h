@@ -200,6 +200,28 @@ MK_API mk_status mk_bp_move_proxy(mk_bp *bp, mk_bp_id id, mk_aabb box);
  * no allocation. */
 MK_API mk_status mk_bp_move_proxies(mk_bp *bp, const mk_bp_id *ids, size_t id_stride, const mk_aabb *boxes,
                                     size_t box_stride, int n, int *done);
+/* A set-only sweep of the caller's own boxes, for a host that reads every
+ * AABB again each frame (ODE's spaces): no proxies, ids, events, statics,
+ * filter or pair table, and nothing to move. Box i is at (char *)boxes + i *
+ * box_stride (0 = packed); *pairs gets every pair (a, b) of indices, a < b,
+ * whose closed boxes overlap (touching boxes overlap), each once, *count
+ * their number. Their order is the sweep's (rows, then lower ends), fixed by
+ * the boxes of this call and of the calls before it: the same calls give the
+ * same order. The array is bp's, valid until the next call on bp. Calls in a
+ * row keep the sweep's plan and start from the last call's order, so box i
+ * should be the same object from call to call (an insertion sort, O(n), on a
+ * coherent scene; correct whatever the boxes). Cost: the stateless sweep of
+ * mk_bp_update's pairs_only SAP (see above), O(n + boxes met + pairs), one
+ * sort of n keys. For a bp that never held a proxy (MK_ERR_BAD_ARGUMENT
+ * otherwise); n <= proxy_capacity (MK_ERR_CAPACITY). Each box is checked as
+ * a proxy's is (MK_ERR_BAD_AABB); MK_ERR_NULL, MK_ERR_BAD_SIZE (n < 0) and
+ * MK_ERR_BAD_ARGUMENT (misaligned) as mk_bp_move_proxies. Allocates the
+ * sweep's scratch (about 80 B per proxy of capacity) on the first call and
+ * doubles the pair array (first 1024 pairs) when it overflows (with
+ * fixed_capacity, not past pair_capacity: MK_ERR_CAPACITY); on any error
+ * *pairs is NULL and *count 0. */
+MK_API mk_status mk_bp_sweep_boxes(mk_bp *bp, const mk_aabb *boxes, size_t box_stride, int n, const mk_bp_pair **pairs,
+                                   int *count);
 /* New filter words: the proxy's pairs are re-filtered at the next update. */
 MK_API mk_status mk_bp_set_filter(mk_bp *bp, mk_bp_id id, uint64_t cat, uint64_t mask);
 MK_API mk_status mk_bp_get_proxy(const mk_bp *bp, mk_bp_id id, mk_aabb *box, void **user);
