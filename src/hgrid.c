@@ -107,6 +107,8 @@ struct mk_hgrid {
     int32_t sized[MK_LEVELS_];   /* proxies in cells per level of their size (gproxy.sized_at) */
     int sized_total, sized_changed;
     int down_level;              /* the size level filed one level finer (MK_LEVEL_MIN_ - 1: none) */
+    int up;                      /* every proxy filed one level coarser (choose_up) */
+    int up_clock;                /* updates since the grid was made, for choose_up */
     uint8_t used[MK_LEVELS_];    /* level in use since the last rebuild */
     int32_t used_list[MK_LEVELS_]; int used_count; /* ascending */
     /* cells */
@@ -244,6 +246,40 @@ static void choose_down_level(struct mk_hgrid *g)
     while (i > 0 && g->sized[i] == 0) --i;
     top = g->sized[i];
     if (i > 0 && g->sized_total - top > MK_DOWN_RATIO_ * top) g->down_level = i + MK_LEVEL_MIN_;
+}
+
+/* Boxes of one size lined up in a thin cluster (a corridor: 90% of them in
+ * a tube two sizes wide) share their cells on the tube's two thin axes
+ * anyway: there, cells twice as big add candidates only along the tube
+ * (4/3 as many: 10k boxes, 32k -> 46k) while halving the cell-wall
+ * crossings and the cells per box (8 -> 3.4), and the grid is 15-20%
+ * faster (bench_broadphase corridor 10k, same runs: grid / sweep 1.32-1.46
+ * -> 1.05-1.10). In a volume or a slab (at most one such axis) the
+ * candidates grow 1.8-2.4x and it is slower. So, with a single size in
+ * use: every 32 updates, up to 256 candidates are sampled; when on two
+ * axes nearly all of them (90%, 85% to stay) overlap, everything is filed
+ * one level coarser: the grid is rebuilt when that changes (at most every
+ * 32 updates, the first time at the second update). */
+#define MK_UP_SAMPLE_ 256
+static void choose_up(const mk_bp *bp, struct mk_hgrid *g)
+{
+    const mk_pair_entry *e = bp->pairs.e;
+    int i, k, n = 0, sat = 0, stride = bp->pairs.count / MK_UP_SAMPLE_ + 1, hit[3] = {0, 0, 0};
+    int top = MK_LEVELS_ - 1;
+    while (top > 0 && g->sized[top] == 0) --top;
+    /* one size (two neighbouring levels: a float box of size 1 measures
+     * 1 +- a few ulps of its coordinates) */
+    if (g->sized_total == 0 || g->sized[top] + (top > 0 ? g->sized[top - 1] : 0) != g->sized_total) { g->up = 0; return; }
+    for (i = 0; i < bp->pairs.count; i += stride) {
+        uint32_t a = (uint32_t)(e[i].key >> 32), b = (uint32_t)e[i].key;
+        const mk_real *al = &bp->box[a].lo.x, *ah = &bp->box[a].hi.x, *bl = &bp->box[b].lo.x, *bh = &bp->box[b].hi.x;
+        if (!(e[i].state & MK_PS_CAND) || (g->px[a].st & REG_MASK) != REG_CELLS || (g->px[b].st & REG_MASK) != REG_CELLS) continue;
+        for (k = 0; k < 3; ++k) hit[k] += al[k] <= bh[k] && bl[k] <= ah[k];
+        ++n;
+    }
+    if (n < MK_UP_SAMPLE_ / 4) return; /* too few to judge: as it is */
+    for (k = 0; k < 3; ++k) sat += hit[k] * 100 >= n * (g->up ? 85 : 90);
+    g->up = sat >= 2;
 }
 
 static void count_sized(struct mk_hgrid *g, uint32_t slot, int size_level, int add)
@@ -643,7 +679,7 @@ static int filing_level(const struct mk_hgrid *g, const mk_aabb *b, int bump, in
     int l, lc;
     level_bounds(b, &l, &lc);
     *size = lc > l ? lc : l;
-    if (bump) return *size < MK_LEVEL_MAX_ ? *size + 1 : *size;
+    if (bump || g->up) return *size < MK_LEVEL_MAX_ ? *size + 1 : *size;
     return *size == g->down_level && *size - 1 >= lc ? *size - 1 : *size;
 }
 
@@ -701,9 +737,10 @@ static int refile_in_place(mk_bp *bp, struct mk_hgrid *g, uint32_t slot, const m
     }
     if (!keeps_level(nb, own, &native)) return 0;
     *bump = wants_bump(g, native, moved);
-    if (*bump ? own != native + 1 : own > native && moved * inv_cell(native) < 0.0625) return 0;
+    if (g->up) { if (own != native + 1 && native < MK_LEVEL_MAX_) return 0; } /* file chooses */
+    else if (*bump ? own != native + 1 : own > native && moved * inv_cell(native) < 0.0625) return 0;
     /* in or out of the down level: filed again (file chooses) */
-    if (!*bump && (native == g->down_level) != (own == native - 1)) return 0;
+    else if (!*bump && (native == g->down_level) != (own == native - 1)) return 0;
     if (native != g->px[slot].sized_at) { count_sized(g, slot, 0, 0); count_sized(g, slot, native, 1); }
     /* The margin pays for slow or jittering boxes; a box moving more than
      * the margin per update would leave it anyway, and gets its bare cells. */
@@ -1434,6 +1471,14 @@ mk_status mk_hgrid_update_(mk_bp *bp)
     if (!all && index_stale(g)) {
         all = 1;
         bp->full_rebuilds++;
+    }
+    if (!all && g->up_clock++ % 32 == 1) {
+        int was = g->up;
+        choose_up(bp, g);
+        if (g->up != was) {
+            all = 1;
+            bp->full_rebuilds++;
+        }
     }
     if (all) {
         rebuild(bp, g);

@@ -327,6 +327,48 @@ START_TEST(top_level_filed_finer)
 }
 END_TEST
 
+/* Unit boxes in a tube two boxes wide along x (and a few in a cube aside),
+ * bouncing inside it: the grid files them one level coarser once it sees
+ * its candidates overlap on the tube's two thin axes (a rebuild), then
+ * half the tube's boxes become big and the single size is gone (another
+ * rebuild back); the set stays exact on every frame. */
+START_TEST(thin_tube_filed_coarser)
+{
+    static world w;
+    int i, f, k, rebuilds_before = 0;
+    mk_bp_stats st;
+    if (!world_init(&w, 43, MAXN, 0)) return;
+    for (i = 0; i < 400; ++i) {
+        int tube = i % 10 != 0;
+        mk_vec3 c = tube ? mk_v3((mk_real)mk_rng_range(&w.rng, 0.5, 180), (mk_real)mk_rng_range(&w.rng, 0.5, 1.5), (mk_real)mk_rng_range(&w.rng, 0.5, 1.5))
+                         : mk_rng_v3(&w.rng, 10, 20);
+        add_obj(&w, box_at(c, mk_v3((mk_real)0.5, (mk_real)0.5, (mk_real)0.5)), 0);
+        w.o[i].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)0.05);
+    }
+    for (f = 0; f < 100; ++f) {
+        if (f == 40) {
+            MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[2], &st), MK_OK);
+            rebuilds_before = st.full_rebuilds;
+            ck_assert_int_ge(rebuilds_before, 2); /* the first build, then coarser */
+        }
+        for (i = 0; i < w.n; ++i) {
+            mk_aabb b = w.o[i].box;
+            if (f == 60 && i % 2) b.hi = mk_v3_add(b.hi, mk_v3(3, 0, 0)); /* now 4 long: two sizes */
+            for (k = 0; k < 3 && i % 10 != 0; ++k) { /* bounce off the tube's walls */
+                mk_real *v = &w.o[i].vel.x, lo = (&b.lo.x)[k], hi = (&b.hi.x)[k];
+                if ((k > 0 && (lo < 0 || hi > 2)) || (k == 0 && (lo < 0 || hi > 181))) v[k] = -v[k];
+            }
+            move_obj(&w, i, b);
+            drift(&w, i, 1);
+        }
+        step(&w, f);
+    }
+    MK_ASSERT_STATUS(mk_bp_get_stats(w.bp[2], &st), MK_OK);
+    ck_assert_int_gt(st.full_rebuilds, rebuilds_before); /* back to its own level */
+    world_fini(&w);
+}
+END_TEST
+
 /* AUTO starts small and coherent (SAP), then the scene grows past what SAP
  * is good at (hundreds of boxes each passing several others a frame) and
  * AUTO switches to the grid: the set stays exact and the events replay
@@ -1082,6 +1124,7 @@ static Suite *broadphase_suite(void)
     tcase_add_test(tc, churn);
     tcase_add_test(tc, mixed_sizes_1_to_1000);
     tcase_add_test(tc, top_level_filed_finer);
+    tcase_add_test(tc, thin_tube_filed_coarser);
     tcase_add_test(tc, static_dynamic_mix);
     tcase_add_test(tc, auto_switches_structure);
     tcase_add_test(tc, auto_weighs_swaps_against_candidates);

@@ -76,7 +76,9 @@
  *                (a proxy is also filed in every coarser level in use, and
  *                candidates outnumber pairs ~6x on sizes 1..100 even with
  *                the coarsest size level filed one level finer, which it
- *                is while finer proxies outnumber it 4 to 1), when one cell holds
+ *                is while finer proxies outnumber it 4 to 1; boxes of one
+ *                size lined up in a thin cluster, whose candidates overlap on
+ *                two axes anyway, are filed one level coarser), when one cell holds
  *                many proxies (candidates grow with its square), on fast
  *                motion (every crossing re-files cells, a fast mover looks up
  *                statics every update; a level where most proxies are fast is
