@@ -280,12 +280,44 @@ mk_status mk_pairs_set_add_(mk_bp *bp, uint32_t a, uint32_t b)
     return push_key(bp, mk_pair_key_(a, b));
 }
 
+/* Prefix sums of per-slot counts: c[s] becomes the first position of slot s. */
+static void bucket_starts(uint32_t *c, int slots)
+{
+    uint32_t sum = 0;
+    int s;
+    for (s = 0; s < slots; ++s) { uint32_t v = c[s]; c[s] = sum; sum += v; }
+}
+
+/* The set, sorted, from n unsorted keys with a few pairs per slot: two
+ * stable counting sorts (by the higher slot, then by the lower one, writing
+ * the pairs themselves). Four sequential passes and two scatters, with no
+ * branch on the data: cheaper than sorting each lower slot's bucket, whose
+ * sizes vary from pair to pair and mislead the branch predictor. */
+static void set_from_keys(mk_bp *bp, const uint64_t *keys, uint64_t *tmp, int n)
+{
+    mk_pair_table *t = &bp->pairs;
+    uint32_t *c = bp->bucket;
+    int i, slots = bp->hi_slot;
+    memset(c, 0, (size_t)slots * sizeof *c);
+    for (i = 0; i < n; ++i) c[(uint32_t)keys[i]]++;
+    bucket_starts(c, slots);
+    for (i = 0; i < n; ++i) tmp[c[(uint32_t)keys[i]]++] = keys[i];
+    memset(c, 0, (size_t)slots * sizeof *c);
+    for (i = 0; i < n; ++i) c[tmp[i] >> 32]++;
+    bucket_starts(c, slots);
+    for (i = 0; i < n; ++i) t->set[c[tmp[i] >> 32]++] = pair_of(bp, tmp[i]);
+}
+
 void mk_pairs_set_end_(mk_bp *bp)
 {
     mk_pair_table *t = &bp->pairs;
     int i, n = t->full_count;
-    mk_sort_pairs_(bp, t->scratch, t->scratch2, n);
-    for (i = 0; i < n; ++i) t->set[i] = pair_of(bp, t->scratch[i]);
+    if (n >= bp->hi_slot / 2) {
+        set_from_keys(bp, t->scratch, t->scratch2, n);
+    } else {
+        mk_sort_u64_(t->scratch, t->scratch2, n);
+        for (i = 0; i < n; ++i) t->set[i] = pair_of(bp, t->scratch[i]);
+    }
     t->set_count = n;
     t->added_count = t->removed_count = 0;
     t->full = 2; /* mk_pairs_finish_ has nothing to add */

@@ -430,7 +430,9 @@ static int sweep_is_cheap(mk_bp *bp)
  * 1.6-2.8x faster, estimate 3-5x) and Bullet's 3000 falling boxes (SAP
  * 2.9x fewer instructions in mk_bp_update over 300 steps; estimate 1-6x
  * cheaper, until the pile spreads and SAP's swaps run over budget). Costs
- * 32 movers x at most 2048 proxies, a few million instructions, per choice. */
+ * 32 movers x at most 2048 proxies, each proxy read once for its movers:
+ * ~80 instructions a (mover, proxy) pair, ~5 M per choice at 10k proxies
+ * (bench_broadphase uniform with events; it was ~10 M). */
 #define MK_BP_COST_MOVERS_ 32
 #define MK_BP_COST_AGAINST_ 2048
 #define MK_BP_COST_MARGIN_ 2.0
@@ -446,26 +448,61 @@ static int flips(mk_real o, mk_real n, mk_real bo, mk_real bn)
     return (o < bo) != (n < bn);
 }
 
-static void cost_against(const mk_aabb *o, const mk_aabb *n, mk_real travel, const mk_aabb *bo, const mk_aabb *bn,
-                         int moved, move_cost_ *c)
+/* A sampled mover or proxy as cost_against reads it: its boxes before (o)
+ * and after (n) the move, the span both cover on each axis, its size. */
+typedef struct sample_ { mk_real ol[3], oh[3], nl[3], nh[3], lo[3], hi[3], size[3]; } sample_;
+
+static void sample_of(const mk_aabb *o, const mk_aabb *n, sample_ *m)
 {
-    const mk_real *ol = &o->lo.x, *oh = &o->hi.x, *nl = &n->lo.x, *nh = &n->hi.x;
-    const mk_real *bl = &bo->lo.x, *bh = &bo->hi.x, *bnl = &bn->lo.x, *bnh = &bn->hi.x;
-    mk_real gap = -MK_REAL_MAX, depth = MK_REAL_MAX;
-    int k, near = 1;
+    int k;
     for (k = 0; k < 3; ++k) {
-        mk_real d = bl[k] - oh[k] > ol[k] - bh[k] ? bl[k] - oh[k] : ol[k] - bh[k];
-        /* no endpoint order can flip on an axis where the two boxes' spans
-         * before and after the move do not meet (most proxies, most axes) */
-        if (mk_min(bl[k], bnl[k]) <= mk_max(oh[k], nh[k]) && mk_min(ol[k], nl[k]) <= mk_max(bh[k], bnh[k]))
-            c->swaps[moved] += flips(ol[k], nl[k], bl[k], bnl[k]) + flips(ol[k], nl[k], bh[k], bnh[k]) +
-                               flips(oh[k], nh[k], bl[k], bnl[k]) + flips(oh[k], nh[k], bh[k], bnh[k]);
-        near &= d < mk_max(oh[k] - ol[k], bh[k] - bl[k]);
-        if (d > gap) gap = d;
-        if (-d < depth) depth = -d;
+        m->ol[k] = (&o->lo.x)[k]; m->oh[k] = (&o->hi.x)[k];
+        m->nl[k] = (&n->lo.x)[k]; m->nh[k] = (&n->hi.x)[k];
+        m->lo[k] = mk_min(m->ol[k], m->nl[k]);
+        m->hi[k] = mk_max(m->oh[k], m->nh[k]);
+        m->size[k] = m->oh[k] - m->ol[k];
     }
-    c->near[moved] += near;
-    c->woken[moved] += near && (gap > 0 ? gap : depth) <= 2 * travel;
+}
+
+/* Do the spans of m and b (before and after the move) meet on axis k? */
+static int spans_meet(const sample_ *m, const sample_ *b, int k)
+{
+    return (b->lo[k] <= m->hi[k]) & (m->lo[k] <= b->hi[k]);
+}
+
+/* The four endpoint pairs of m and b on axis k whose order flips. */
+static int axis_flips(const sample_ *m, const sample_ *b, int k)
+{
+    return flips(m->ol[k], m->nl[k], b->ol[k], b->nl[k]) + flips(m->ol[k], m->nl[k], b->oh[k], b->nh[k]) +
+           flips(m->oh[k], m->nh[k], b->ol[k], b->nl[k]) + flips(m->oh[k], m->nh[k], b->oh[k], b->nh[k]);
+}
+
+/* The gap between m and b on axis k (negative: their overlap), before the move. */
+static mk_real axis_gap(const sample_ *m, const sample_ *b, int k)
+{
+    return mk_max(b->ol[k] - m->oh[k], m->ol[k] - b->oh[k]);
+}
+
+/* Runs for every sampled (mover, proxy) pair, so the common case -- spans
+ * apart on every axis, not near -- is a few compares without a branch on
+ * each axis: flips are counted only where the spans meet, and the gap only
+ * once the pair is near on every axis. travel: the mover's. */
+static void cost_against(const sample_ *m, mk_real travel, const sample_ *b, int moved, move_cost_ *c)
+{
+    mk_real d0 = axis_gap(m, b, 0), d1, d2, gap, depth;
+    int meet0 = spans_meet(m, b, 0), meet1 = spans_meet(m, b, 1), meet2 = spans_meet(m, b, 2);
+    /* no endpoint order can flip on an axis where the two boxes' spans
+     * before and after the move do not meet (most proxies, most axes) */
+    if (meet0 | meet1 | meet2)
+        c->swaps[moved] += (meet0 ? axis_flips(m, b, 0) : 0) + (meet1 ? axis_flips(m, b, 1) : 0) + (meet2 ? axis_flips(m, b, 2) : 0);
+    if (!(d0 < mk_max(m->size[0], b->size[0]))) return; /* not near */
+    d1 = axis_gap(m, b, 1);
+    d2 = axis_gap(m, b, 2);
+    if (!(d1 < mk_max(m->size[1], b->size[1])) || !(d2 < mk_max(m->size[2], b->size[2]))) return;
+    gap = mk_max(d0, mk_max(d1, d2));
+    depth = mk_min(-d0, mk_min(-d1, -d2));
+    c->near[moved]++;
+    c->woken[moved] += (gap > 0 ? gap : depth) <= 2 * travel;
 }
 
 static int is_mover(const mk_bp *bp, uint32_t s)
@@ -478,6 +515,9 @@ static int is_mover(const mk_bp *bp, uint32_t s)
 static int sap_is_cheaper(const mk_bp *bp)
 {
     move_cost_ c = {{0, 0}, {0, 0}, {0, 0}};
+    sample_ mv[MK_BP_COST_MOVERS_], pb;
+    mk_real travel[MK_BP_COST_MOVERS_];
+    uint32_t slot[MK_BP_COST_MOVERS_], s;
     double sap, grid;
     int i, t = 0, movers = 0, sampled = 0, stride, jstride;
     for (i = 0; i < bp->dirty_count; ++i) movers += is_mover(bp, bp->dirty[i]);
@@ -485,15 +525,22 @@ static int sap_is_cheaper(const mk_bp *bp)
     stride = movers > MK_BP_COST_MOVERS_ ? movers / MK_BP_COST_MOVERS_ : 1;
     jstride = (bp->hi_slot + MK_BP_COST_AGAINST_ - 1) / MK_BP_COST_AGAINST_;
     for (i = 0; i < bp->dirty_count && sampled < MK_BP_COST_MOVERS_; ++i) {
-        uint32_t m = bp->dirty[i], s;
+        uint32_t m = bp->dirty[i];
         const mk_aabb *o = &bp->box[m], *n = &bp->next[m];
-        mk_real travel;
         if (!is_mover(bp, m) || t++ % stride) continue;
-        travel = mk_max(mk_v3_max_abs(mk_v3_sub(n->lo, o->lo)), mk_v3_max_abs(mk_v3_sub(n->hi, o->hi)));
-        for (s = (uint32_t)(sampled % jstride); s < (uint32_t)bp->hi_slot; s += (uint32_t)jstride)
-            if (s != m && (bp->flags[s] & (MK_PF_ALIVE | MK_PF_NEW | MK_PF_DYING)) == MK_PF_ALIVE)
-                cost_against(o, n, travel, &bp->box[s], &bp->next[s], (bp->flags[s] & MK_PF_MOVED) != 0, &c);
-        ++sampled;
+        sample_of(o, n, &mv[sampled]);
+        travel[sampled] = mk_max(mk_v3_max_abs(mk_v3_sub(n->lo, o->lo)), mk_v3_max_abs(mk_v3_sub(n->hi, o->hi)));
+        slot[sampled++] = m;
+    }
+    /* Mover j is weighed against the proxies s = j (mod jstride): each such
+     * proxy is read once for all its movers. */
+    for (s = 0; s < (uint32_t)bp->hi_slot; ++s) {
+        int j = (int)(s % (uint32_t)jstride), moved;
+        if (j >= sampled || (bp->flags[s] & (MK_PF_ALIVE | MK_PF_NEW | MK_PF_DYING)) != MK_PF_ALIVE) continue;
+        sample_of(&bp->box[s], &bp->next[s], &pb);
+        moved = (bp->flags[s] & MK_PF_MOVED) != 0;
+        for (; j < sampled; j += jstride)
+            if (slot[j] != s) cost_against(&mv[j], travel[j], &pb, moved, &c);
     }
     /* a pair of movers is met from both sides: half each */
     sap = MK_BP_COST_SWAP_ * (c.swaps[0] + 0.5 * c.swaps[1]);

@@ -294,6 +294,39 @@ END_TEST
 START_TEST(static_dynamic_mix) { run_motion(5, 400, 14, 0.5, 2, 0.8, 0.02, 0.005, 150); }
 END_TEST
 
+/* The grid files its coarsest size level one level finer while the finer
+ * boxes outnumber it 4 to 1 (their guest candidates with it are what the
+ * scene pays for): big boxes come (20 among 240 small: filed finer), more
+ * come (100: filed at their own level again, re-filed as they cross cell
+ * walls) and all go (the small ones' level is the coarsest again); the set
+ * stays exact through every change of the rule. */
+START_TEST(top_level_filed_finer)
+{
+    static world w;
+    int i, f, first_big = 0;
+    if (!world_init(&w, 41, MAXN, 0)) return;
+    for (i = 0; i < 240; ++i) {
+        add_obj(&w, random_box(&w.rng, 30, 0.5, 2), 0);
+        w.o[i].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)0.1);
+    }
+    for (f = 0; f < 120; ++f) {
+        int add = f == 0 ? 20 : f == 40 ? 80 : 0;
+        if (f == 0) first_big = w.n;
+        for (i = 0; i < add && w.n < MAXN; ++i) {
+            add_obj(&w, random_box(&w.rng, 30, 6, 8), 0);
+            w.o[w.n - 1].vel = mk_v3_scale(mk_rng_dir(&w.rng), (mk_real)0.4);
+        }
+        if (f == 80)
+            for (i = first_big; i < w.n; ++i)
+                if (w.o[i].alive) kill_obj(&w, i);
+        for (i = 0; i < w.n; ++i)
+            if (w.o[i].alive) drift(&w, i, 1);
+        step(&w, f);
+    }
+    world_fini(&w);
+}
+END_TEST
+
 /* AUTO starts small and coherent (SAP), then the scene grows past what SAP
  * is good at (hundreds of boxes each passing several others a frame) and
  * AUTO switches to the grid: the set stays exact and the events replay
@@ -1048,6 +1081,7 @@ static Suite *broadphase_suite(void)
     tcase_add_test(tc, teleports);
     tcase_add_test(tc, churn);
     tcase_add_test(tc, mixed_sizes_1_to_1000);
+    tcase_add_test(tc, top_level_filed_finer);
     tcase_add_test(tc, static_dynamic_mix);
     tcase_add_test(tc, auto_switches_structure);
     tcase_add_test(tc, auto_weighs_swaps_against_candidates);
