@@ -547,7 +547,7 @@ typedef struct box_vert {
  * One loop: each vertex's distance is found once, as the end of the edge
  * before it; a pass that cuts nothing copies the polygon (the caller skips
  * the sides no corner is outside of). */
-static int clip_box_side(int face, int q, mk_feature finc_face, mk_real sign, int axis, mk_real h, mk_real slop, const box_vert *src,
+MK_ALWAYS_INLINE int clip_box_side(int face, int q, mk_feature finc_face, mk_real sign, int axis, mk_real h, mk_real slop, const box_vert *src,
                          int n, box_vert *dst)
 {
     int m = 0, i;
@@ -596,7 +596,7 @@ static int clip_box_side(int face, int q, mk_feature finc_face, mk_real sign, in
  * frame; with `reduce`, only the four mk_mf_pick4 keeps, chosen in the
  * reference face's own coordinates (exact there), so the others are never
  * moved to A's frame. */
-static void emit_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce, const box_vert *v,
+MK_ALWAYS_INLINE void emit_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce, const box_vert *v,
                        int cnt)
 {
     mk_vec3 hv = (ref_is_a ? p->a : p->b)->u.half_extents;
@@ -627,7 +627,7 @@ static void emit_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_re
     }
 }
 
-void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce)
+MK_ALWAYS_INLINE void clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce)
 {
     const mk_shape *ref = ref_is_a ? p->a : p->b, *inc = ref_is_a ? p->b : p->a;
     mk_vec3 h = ref->u.half_extents, g = inc->u.half_extents, n = m->normal, d, col[3], tri, c0, cu, cv, s, t, corner[4];
@@ -693,6 +693,13 @@ void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_rea
             cnt = clip_box_side(face, q, finc_face, sd[1], sd[0], hh[sd[0]], side_slop, buf[cur], cnt, buf[cur ^ 1]), cur ^= 1;
     }
     emit_boxes(m, p, ref_is_a, face, ra, rb, reduce, buf[cur], cnt);
+}
+
+/* With the reference box's side known, every index above is a constant. */
+void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce)
+{
+    if (ref_is_a) clip_boxes(m, p, 1, face, ra, rb, reduce);
+    else clip_boxes(m, p, 0, face, ra, rb, reduce);
 }
 
 /* ---- manifold from closest points ------------------------------------------ */

@@ -24,8 +24,9 @@ typedef struct epa_poly {
 /* Face f over silhouette edge (a, b) and apex w, given d_a = a - w and
  * d_b = b - w (each shared by the two new faces at that vertex): normal
  * d_a x d_b = (b - a) x (w - a). 0 if it is degenerate or has the origin clearly
- * outside (an inverted face): the polytope would be invalid. */
-static int fan_face(epa_poly *P, int f, int a, int b, int wi, mk_vec3 da, mk_vec3 db)
+ * outside (an inverted face): the polytope would be invalid. Inlined: as a
+ * call it cost 5-7 % of a penetrating hull query (callgrind, bench_narrow). */
+MK_ALWAYS_INLINE int fan_face(epa_poly *P, int f, int a, int b, int wi, mk_vec3 da, mk_vec3 db)
 {
     epa_face *F = &P->f[f];
     mk_vec3 n = mk_v3_cross(da, db);
@@ -210,6 +211,29 @@ static int remove_visible(epa_poly *P, epa_hole *H, int f0, int *sf, int *si)
     return edges;
 }
 
+/* The simplest hole, when w sees f0 and none of its neighbours: f0's own
+ * three edges, found without the flood and the walk (22-30 % of expansions
+ * on the penetrating hull rows of demos/bench_narrow; -1 to -1.6 %
+ * instructions per query). Returns 0, with nothing changed, otherwise. */
+static int hole_of_one(epa_poly *P, epa_hole *H, int f0)
+{
+    const epa_face *F = &P->f[f0];
+    int i;
+    for (i = 0; i < 3; ++i)
+        if (sees(P, F->adj[i], H->w)) return 0;
+    P->f[f0].live = 0;
+    H->removed[0] = (short)f0;
+    H->nr = 1;
+    for (i = 0; i < 3; ++i) {
+        H->g[i] = F->adj[i];
+        H->j[i] = F->edge[i];
+        H->a[i] = F->v[i];
+        H->b[i] = F->v[next3[i]];
+    }
+    H->nh = 3;
+    return 1;
+}
+
 /* The silhouette in order around the hole, walked from edge (f, i): after
  * edge a -> b, turn about b through removed faces to the next edge that
  * has a kept face across it. New face k over (a_k, b_k, w) then meets new
@@ -245,8 +269,10 @@ static int expand(epa_poly *P, int f0, int wi)
     int k, edges, sf = 0, si = 0;
     H.w = P->v[wi].w;
     H.nr = H.nh = 0;
-    edges = remove_visible(P, &H, f0, &sf, &si);
-    if (edges < 3 || !walk_silhouette(P, &H, sf, si, edges)) return 0;
+    if (!hole_of_one(P, &H, f0)) {
+        edges = remove_visible(P, &H, f0, &sf, &si);
+        if (edges < 3 || !walk_silhouette(P, &H, sf, si, edges)) return 0;
+    }
     for (k = 0; k < H.nr; ++k) {
         P->f[H.removed[k]].dist = (mk_real)HUGE_VAL; /* out of nearest_face's way until reused */
         P->free_faces[P->nfree++] = H.removed[k];

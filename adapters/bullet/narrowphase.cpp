@@ -2,6 +2,7 @@
 // (see minko_bullet.h).
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <new>
 
 #include <LinearMath/btThreads.h>
@@ -403,17 +404,17 @@ bool CollisionConfiguration::minko_handles(const ShapeMap &a, const ShapeMap &b)
 
 namespace {
 
-// Whether a pose was made from world transform t: the origin first, where a
-// moving body differs.
+// Whether a pose was made from world transform t, bit for bit: the origin
+// first, where a moving body differs. Compared as bytes (inlined word
+// compares): on 3000 boxes (callgrind, 300 steps) world_poses fell from 370
+// to 315 instructions per pair against twelve scalar compares. -0 against +0
+// then only costs a rebuilt pose, and a NaN transform keeps its cached error
+// status.
 bool made_from(const btScalar *from, const btTransform &t)
 {
-    const btVector3 &o = t.getOrigin();
-    if (from[0] != o.x() || from[1] != o.y() || from[2] != o.z()) return false;
-    for (int i = 0; i < 3; i++) {
-        const btVector3 &row = t.getBasis()[i];
-        if (from[3 + 3 * i] != row.x() || from[4 + 3 * i] != row.y() || from[5 + 3 * i] != row.z()) return false;
-    }
-    return true;
+    const size_t row = 3 * sizeof(btScalar);
+    return std::memcmp(from, &t.getOrigin().x(), row) == 0 && std::memcmp(from + 3, &t.getBasis()[0].x(), row) == 0 &&
+           std::memcmp(from + 6, &t.getBasis()[1].x(), row) == 0 && std::memcmp(from + 9, &t.getBasis()[2].x(), row) == 0;
 }
 
 void keep_source(btScalar *from, const btTransform &t)

@@ -1390,19 +1390,24 @@ START_TEST(np_world_poses_follow_the_objects)
     }
     const double tol = 1e3 * std::numeric_limits<btScalar>::epsilon();
     // Passes 0-2: the first world alone; pass 3: the second world, whose
-    // objects take the first world's entries; pass 4: the first world again.
-    for (int pass = 0; pass < 5; pass++) {
+    // objects take the first world's entries; pass 4: the first world again;
+    // pass 5: the box turned in place by 0.1 rad about z (same origin), its
+    // lowest edge 0.5 (cos 0.1 + sin 0.1) below its centre.
+    const btScalar turn = btScalar(0.1);
+    const double turned = 0.5 * (std::cos(0.1) + std::sin(0.1)) + 0.5 - 0.98;
+    for (int pass = 0; pass < 6; pass++) {
         if (pass == 3) {
             world2.performDiscreteCollisionDetection();
             MK_ASSERT_NEAR(pair_distance(&dispatcher2, &ground2, &box2), -0.05, tol);
             continue;
         }
         world.performDiscreteCollisionDetection();
-        const double d = pass == 1 ? 0.12 : 0.02;  // pass 1: the box moved 0.1 down since pass 0
+        const double d = pass == 1 ? 0.12 : pass == 5 ? turned : 0.02;  // pass 1: the box moved 0.1 down since pass 0
         MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &box), -d, tol);
         MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &comp), -0.03, tol);
         for (const btCollisionObject &o : row) MK_ASSERT_NEAR(pair_distance(&dispatcher, &ground, &o), -0.01, tol);
-        box.setWorldTransform(btTransform(id, btVector3(0, btScalar(pass == 0 ? 0.88 : 0.98), 0)));
+        const btQuaternion q = pass == 4 ? btQuaternion(btVector3(0, 0, 1), turn) : id;
+        box.setWorldTransform(btTransform(q, btVector3(0, btScalar(pass == 0 ? 0.88 : 0.98), 0)));
     }
     ck_assert_int_eq(config.stats.collide_errors.load(), 0);
     for (btCollisionObject &o : row) world.removeCollisionObject(&o);

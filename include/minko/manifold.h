@@ -61,11 +61,13 @@
  * apart along last frame's separating axis tests that one axis from the
  * world poses and stops; on demos/bench_contacts --quick's cases, under
  * callgrind, steady state (--loops 5 less --loops 1), mk_collide_pose:
- * about 3.5k instructions warm for tilted stacked boxes (2.7k cold through
+ * about 3.3k instructions warm for tilted stacked boxes (2.7k cold through
  * mk_collide, where the exact axis is often an edge pair: one point),
- * 2.7k for random overlaps, 0.3k for separated boxes whose bounding boxes
- * overlap; of a stacked face contact about 0.7k SAT, 1.5k the clip, 0.3k
- * the reduction of 8 points to 4, 0.6k the pose and the move to world);
+ * 2.6k for random overlaps, 0.3k for separated boxes whose bounding boxes
+ * overlap; of the stacked ones, per call, about 0.7k SAT, 1.2k the clip
+ * (only the sides some incident corner is outside of are passed), 0.3k
+ * the reduction of up to 8 points to 4, 1.1k the checks, the pose, the
+ * edge contacts and the move to world);
  * for hulls SAT's O(F_A S_B + F_B S_A +
  * E_A E_B) (src/sat.h) plus O(n + m) clipping of faces with n and m (at most
  * 32) vertices; GJK/EPA pairs are bounded by their iteration caps.
