@@ -223,6 +223,10 @@ static mk_status reserve(space_state *st, int n)
     if (n <= cap && st->bp) return MK_OK;
     while (cap < n) cap = cap ? 2 * cap : 256;
     def.proxy_capacity = cap;
+    /* mk_bp_sweep_boxes writes its own pair array and never touches the pair
+     * table: keep that table at its minimum (2 * cap entries would be ~1.4 MB
+     * at 10 000 geoms, never used). */
+    def.pair_capacity = 16;
     if ((s = mk_bp_create(&def, NULL, &bp)) != MK_OK) return s;
     if (st->bp) mk_bp_destroy(st->bp);
     st->bp = bp;
