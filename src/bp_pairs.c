@@ -408,12 +408,12 @@ static void sort_bucket(uint64_t *b, uint64_t *tmp, int k)
 
 void mk_sort_pairs_(mk_bp *bp, uint64_t *keys, uint64_t *tmp, int n)
 {
-    uint32_t *c = bp->bucket, sum = 0, start = 0;
+    uint32_t *c = bp->bucket, start = 0;
     int s, i, slots = bp->hi_slot;
     if (n < slots / 2) { mk_sort_u64_(keys, tmp, n); return; }
     memset(c, 0, (size_t)slots * sizeof *c);
     for (i = 0; i < n; ++i) c[keys[i] >> 32]++;
-    for (s = 0; s < slots; ++s) { uint32_t v = c[s]; c[s] = sum; sum += v; }
+    bucket_starts(c, slots);
     for (i = 0; i < n; ++i) tmp[c[keys[i] >> 32]++] = keys[i];
     /* now c[s] is the end of bucket s; keys is free to serve as scratch */
     for (s = 0; s < slots; start = c[s++])
