@@ -304,8 +304,10 @@ static int stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, c
     return 0;
 }
 
-int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
-                       mk_manifold *out)
+/* Everything after the hint (out of line: the pair that stays apart
+ * needs none of this frame). */
+static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+                               mk_manifold *out)
 {
     mk_real ra = a->radius, rb = b->radius, deepest = -MK_REAL_MAX;
     mk_vec3 ha = a->u.half_extents, hb = b->u.half_extents, n, nw;
@@ -313,10 +315,6 @@ int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, 
     mk_sat_result sat;
     mk_pair p;
     int i, count;
-    if (cache && cache->axis > MK_MF_APART_HINT && stay_apart(a, xa, b, xb, margin, cache)) {
-        none(out, mk_v3(0, 0, 1));
-        return 1;
-    }
     {
         /* Bounding balls about the centres farther apart than the margin. */
         mk_real reach = ra + mk_v3_len(ha) + rb + mk_v3_len(hb) + margin;
@@ -327,8 +325,9 @@ int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, 
         }
     }
     p = mk_pair_of_poses_(a, xa, b, xb);
-    opt = mk_sat_defaults();
     opt.stop_above = margin + ra + rb;
+    opt.first = MK_SAT_NONE; /* the hint was tested above */
+    opt.first_a = opt.first_b = -1;
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
     opt.prefer_rel = MK_MF_PREFER_REL;
     opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0 : MK_MF_PREFER_ABS * mk_min(min3(ha), min3(hb));
@@ -390,6 +389,16 @@ int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, 
     out->normal = nw;
     out->count = count;
     return 1;
+}
+
+int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+                       mk_manifold *out)
+{
+    if (cache && cache->axis > MK_MF_APART_HINT && stay_apart(a, xa, b, xb, margin, cache)) {
+        none(out, mk_v3(0, 0, 1));
+        return 1;
+    }
+    return collide(a, xa, b, xb, margin, cache, out);
 }
 
 #endif
