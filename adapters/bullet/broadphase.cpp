@@ -31,7 +31,7 @@ namespace {
 // O(n + k log k) for k changed places, and a radix sort on keys packed to the
 // uids' width when most places changed (the first step). Keys are unique, so
 // either way the order is exactly the sorted order of the current pairs,
-// Bullet's, whatever the history. Memory: four arrays of the pair count,
+// Bullet's, whatever the history. Memory: six arrays of the pair count,
 // grown by doubling, reused every step.
 class PairCache : public btHashedOverlappingPairCache {
 public:
