@@ -710,23 +710,14 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
         for (i = 0; i < count; ++i) deepest = mk_max(deepest, out->points[i].depth);
     } else {
         /* Edge pair: the closest points of the two edges, one point. */
-        mk_vec3 a0, a1, b0, b1, qa;
-        mk_real s, t, gap = sat.separation, depth;
-        int ea = mk_box_hull_edge_id(sat.a), eb = mk_box_hull_edge_id(sat.b);
-        mk_box_edge_ends(ha, ea, &a0, &a1);
-        mk_box_edge_ends(hb, eb, &b0, &b1);
-        b0 = mk_v3_add(mk_mat3_mul_v3(p.r, b0), p.t);
-        b1 = mk_v3_add(mk_mat3_mul_v3(p.r, b1), p.t);
-        mk_segment_segment(a0, a1, b0, b1, &s, &t);
-        qa = mk_v3_lerp(a0, a1, s);
-        /* Apart, the edges' closest points are a gap only if neither end clamped. */
-        if (gap > 0) gap = mk_v3_dist(qa, mk_v3_lerp(b0, b1, t));
-        depth = ra + rb - gap;
+        mk_vec3 qa;
+        mk_feature fa, fb;
+        mk_real depth = mk_mf_edge_contact(&p, sat.a, sat.b, sat.separation, ra + rb, &qa, &fa, &fb);
         count = 0;
         if (depth >= -margin) {
             mk_vec3 la = mk_v3_mad(qa, ra, n);
             put(out, 0, nw, la, mk_v3_add(mk_mat3_mul_v3(xa->r, la), xa->p), mk_mat3_tmul_v3(p.r, mk_v3_sub(mk_v3_mad(la, -depth, n), p.t)), depth,
-                MK_FEATURE_PAIR(MK_FEATURE(MK_FEATURE_EDGE, ea), MK_FEATURE(MK_FEATURE_EDGE, eb)));
+                MK_FEATURE_PAIR(fa, fb));
             deepest = depth;
             count = 1;
         }

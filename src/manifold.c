@@ -235,23 +235,6 @@ static void polytope_face(const mk_shape *s, int face, mk_feat *f)
     else mk_hull_face(s->u.hull, face, -1, f);
 }
 
-/* The ends and the feature of the edge named by half-edge e of polytope s
- * (a box enters SAT as its mk_box_hull view, whose half-edges map to box
- * edge IDs). */
-static mk_feature polytope_edge(const mk_shape *s, int e, mk_vec3 *e0, mk_vec3 *e1)
-{
-    if (s->type == MK_SHAPE_BOX) {
-        int id = mk_box_hull_edge_id(e);
-        mk_box_edge_ends(s->u.half_extents, id, e0, e1);
-        return MK_FEATURE(MK_FEATURE_EDGE, id);
-    } else {
-        const mk_hull *h = s->u.hull;
-        *e0 = h->vertices[h->edges[e].origin];
-        *e1 = h->vertices[h->edges[h->edges[e].twin].origin];
-        return MK_FEATURE(MK_FEATURE_EDGE, mk_hull_edge_id(h, e));
-    }
-}
-
 /* Cores apart (rounded or speculative polytopes): SAT's separation is only a
  * lower bound of their distance, reached when the points built along the
  * axis realise it (a face over a face, two edges crossing inside both). If
@@ -361,16 +344,10 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
         mk_support_feature(a, sat.normal, &inc);
         mk_mf_clip(m, &ref, 0, &inc, ra, rb);
     } else {
-        mk_vec3 a0, a1, b0, b1, qa;
-        mk_real s, t, gap = sat.separation;
-        mk_feature fa = polytope_edge(a, sat.a, &a0, &a1), fb = polytope_edge(b, sat.b, &b0, &b1);
-        b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
-        b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
-        mk_segment_segment(a0, a1, b0, b1, &s, &t);
-        qa = mk_v3_lerp(a0, a1, s);
-        /* Apart, the edges' closest points are a gap only if neither end clamped. */
-        if (gap > 0) gap = mk_v3_dist(qa, mk_v3_lerp(b0, b1, t));
-        mk_mf_add(m, mk_v3_mad(qa, ra, sat.normal), ra + rb - gap, fa, fb);
+        mk_vec3 qa;
+        mk_feature fa, fb;
+        mk_real depth = mk_mf_edge_contact(p, sat.a, sat.b, sat.separation, ra + rb, &qa, &fa, &fb);
+        mk_mf_add(m, mk_v3_mad(qa, ra, sat.normal), depth, fa, fb);
     }
 #ifndef MK_WITHOUT_GJK
     if (sat.separation > 0 && !realised(m, ra + rb - sat.separation, p)) return apart(p, m, cache);

@@ -12,6 +12,7 @@
 
 #include "minko/manifold.h"
 #include "closest.h"
+#include "polytope.h"
 
 /* Most vertices of a support feature (hull faces with more are decimated,
  * keeping the support vertex), and most clipped candidates: a polygon with
@@ -123,6 +124,46 @@ static inline mk_vec3 mk_box_corner(mk_vec3 h, int bits)
     return mk_v3(bits & 1 ? h.x : -h.x, bits & 2 ? h.y : -h.y, bits & 4 ? h.z : -h.z);
 }
 void mk_box_edge_ends(mk_vec3 h, int id, mk_vec3 *e0, mk_vec3 *e1);
+
+/* The ends (the core's own frame) and the feature of the edge named by
+ * half-edge e of polytope s: a box enters SAT as its mk_box_hull view,
+ * whose half-edges map to box edge IDs. */
+static inline mk_feature mk_polytope_edge(const mk_shape *s, int e, mk_vec3 *e0, mk_vec3 *e1)
+{
+    if (s->type == MK_SHAPE_BOX) {
+        int id = mk_box_hull_edge_id(e);
+        mk_box_edge_ends(s->u.half_extents, id, e0, e1);
+        return MK_FEATURE(MK_FEATURE_EDGE, id);
+    } else {
+        const mk_hull *h = s->u.hull;
+        *e0 = h->vertices[h->edges[e].origin];
+        *e1 = h->vertices[h->edges[h->edges[e].twin].origin];
+        return MK_FEATURE(MK_FEATURE_EDGE, mk_hull_edge_id(h, e));
+    }
+}
+
+/* The one contact of an edge-pair SAT axis of two polytopes (box_box.c for
+ * two boxes, manifold.c's polytopes() otherwise): the closest points of
+ * half-edge ea of p->a and half-edge eb of p->b. sep is SAT's separation
+ * along the axis, rr the sum of the rounding radii. Returns the depth
+ * (radii included); *qa is the point on A's core edge (A's frame; the
+ * surface point is qa + ra n), *fa and *fb the two edges' features.
+ * Inline: the box-box pass keeps its frame in registers. */
+static inline mk_real mk_mf_edge_contact(const mk_pair *p, int ea, int eb, mk_real sep, mk_real rr, mk_vec3 *qa, mk_feature *fa,
+                                         mk_feature *fb)
+{
+    mk_vec3 a0, a1, b0, b1;
+    mk_real s, t;
+    *fa = mk_polytope_edge(p->a, ea, &a0, &a1);
+    *fb = mk_polytope_edge(p->b, eb, &b0, &b1);
+    b0 = mk_v3_add(mk_mat3_mul_v3(p->r, b0), p->t);
+    b1 = mk_v3_add(mk_mat3_mul_v3(p->r, b1), p->t);
+    mk_segment_segment(a0, a1, b0, b1, &s, &t);
+    *qa = mk_v3_lerp(a0, a1, s);
+    /* Apart, the edges' closest points are a gap only if neither end clamped. */
+    if (sep > 0) sep = mk_v3_dist(*qa, mk_v3_lerp(b0, b1, t));
+    return rr - sep;
+}
 
 /* Face/edge hysteresis of box and hull pairs (mk_sat_options.prefer; the
  * measurements are in manifold.c): the band is MK_MF_PREFER_REL of the
