@@ -354,52 +354,6 @@ static void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, mk_real
     out->normal = mk_v3(L[0] / l, L[1] / l, L[2] / l);
 }
 
-/* The separation along an edge pair named by opt->first (the box view's
- * half-edges), kept only if it ends the search (a face axis named there
- * has been tested by box_hint_apart). */
-MK_ALWAYS_INLINE int box_first_edges(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d,
-                                     const mk_sat_options *opt, box_edges *e)
-{
-    int i = opt->first_a, j = opt->first_b;
-    if (!(i >= 0 && i < 24 && j >= 0 && j < 24)) return 0;
-    box_edge_axis(r, ar, a, b, d, mk_box_hull_edge_id(i) / 4, mk_box_hull_edge_id(j) / 4, -MK_REAL_MAX, e);
-    if (e->sep > opt->stop_above) return 1;
-    e->sep = -MK_REAL_MAX; /* not apart along it: the full search answers exactly as without the hint */
-    e->i = e->j = -1;
-    return 0;
-}
-
-/* The separation along one face axis of two boxes: A's face axis k (kind
- * MK_SAT_FACE_A) or B's (MK_SAT_FACE_B), from u, the axis's components
- * along the other box's axes (row k of R for A's, column k for B's), and d,
- * B's centre's offset along it. Returns 1 with *out filled as the full
- * search would stop there when it separates by more than stop. */
-MK_ALWAYS_INLINE int face_apart(const mk_vec3 *ha, const mk_vec3 *hb, mk_sat_kind kind, int k, mk_vec3 u, mk_real d, mk_real stop,
-                                mk_sat_result *out)
-{
-    int of_a = kind == MK_SAT_FACE_A;
-    const mk_vec3 *own = of_a ? ha : hb, *other = of_a ? hb : ha;
-    mk_real h = k == 0 ? own->x : k == 1 ? own->y : own->z, s = d >= 0 ? 1 : -1;
-    mk_real sep = mk_fabs_(d) - h - (mk_fabs_(u.x) * other->x + mk_fabs_(u.y) * other->y + mk_fabs_(u.z) * other->z);
-    if (!(sep > stop)) return 0;
-    out->kind = kind;
-    if (of_a) {
-        out->a = 2 * k + (d >= 0);
-        out->b = -1;
-        out->normal = mk_v3(k == 0 ? s : 0, k == 1 ? s : 0, k == 2 ? s : 0);
-    } else {
-        out->a = -1;
-        out->b = 2 * k + (d < 0);
-        out->normal = mk_v3_scale(u, s);
-    }
-    out->best = out->separation = sep;
-    out->complete = 0;
-    return 1;
-}
-
-/* Is the face index named by a hint (opt->first and its index) valid? */
-MK_ALWAYS_INLINE int face_hint(mk_sat_kind kind, int face) { return (kind == MK_SAT_FACE_A || kind == MK_SAT_FACE_B) && face >= 0 && face < 6; }
-
 MK_ALWAYS_INLINE const mk_vec3 *column(const mk_mat3 *m, int k) { return k == 0 ? &m->c0 : k == 1 ? &m->c1 : &m->c2; }
 
 /* Edge pair hint (half-edges ea of A, eb of B) from world poses: the two
@@ -436,23 +390,6 @@ int mk_sat_box_box_edge_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_pos
     return ia >= 0 && ia < 24 && ib >= 0 && ib < 24 && edge_hint_apart(ha, hb, &xa->r, &xb->r, mk_v3_sub(xb->p, xa->p), ia, ib, stop, out);
 }
 
-/* A face axis named by opt->first, straight from R before anything is set
- * up: a pair that stays apart along last frame's face axis (the common
- * case of boxes whose bounding boxes overlap) costs this and nothing else. */
-static int box_hint_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
-{
-    int face = opt->first == MK_SAT_FACE_A ? opt->first_a : opt->first_b, k = face / 2;
-    mk_vec3 u;
-    if (!face_hint(opt->first, face)) return 0;
-    if (opt->first == MK_SAT_FACE_A) {
-        /* Row k of R: B's axes' components along A's axis k. */
-        u = k == 0 ? mk_v3(R->c0.x, R->c1.x, R->c2.x) : k == 1 ? mk_v3(R->c0.y, R->c1.y, R->c2.y) : mk_v3(R->c0.z, R->c1.z, R->c2.z);
-        return face_apart(&ha, &hb, opt->first, k, u, k == 0 ? t.x : k == 1 ? t.y : t.z, opt->stop_above, out);
-    }
-    u = k == 0 ? R->c0 : k == 1 ? R->c1 : R->c2;
-    return face_apart(&ha, &hb, opt->first, k, u, mk_v3_dot(u, t), opt->stop_above, out);
-}
-
 /* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
  * frame), so every axis below is a few multiply-adds on scalars. Only the
  * index of the best axis of each kind is kept while testing; its normal is
@@ -479,9 +416,8 @@ MK_ALWAYS_INLINE void sat_boxes(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec
 {
     mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3], sa = -MK_REAL_MAX, sb = -MK_REAL_MAX, stop = opt->stop_above;
     box_edges e;
-    int i, j, fa = 0, fb = -1, stopped = 0;
+    int i, j, fa = 0, fb = -1, stopped;
     mk_sat_kind kind;
-    if (opt->first != MK_SAT_NONE && box_hint_apart(ha, hb, R, t, opt, out)) return;
     r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
     r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
     r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
@@ -492,15 +428,11 @@ MK_ALWAYS_INLINE void sat_boxes(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec
     d[0] = t.x, d[1] = t.y, d[2] = t.z;
     e.sep = -MK_REAL_MAX;
     e.i = e.j = -1;
-    /* Last frame's separating edge pair first: a pair that stays apart ends here. */
-    if (opt->first == MK_SAT_EDGES) stopped = box_first_edges(r, ar, a, b, d, opt, &e);
     /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
-    if (!stopped) {
-        box_face_a(ar, a, b, d, 0, &sa, &fa);
-        box_face_a(ar, a, b, d, 1, &sa, &fa);
-        box_face_a(ar, a, b, d, 2, &sa, &fa);
-        stopped = sa > stop;
-    }
+    box_face_a(ar, a, b, d, 0, &sa, &fa);
+    box_face_a(ar, a, b, d, 1, &sa, &fa);
+    box_face_a(ar, a, b, d, 2, &sa, &fa);
+    stopped = sa > stop;
     /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along +R_j. */
     if (!stopped) {
         box_face_b(r, ar, a, b, d, db, 0, &sb, &fb);
@@ -614,9 +546,11 @@ static int realised(mk_real deepest, mk_real depth, const mk_pair *p)
  * axis). A face axis needs one column of each rotation dotted with the
  * other three: the axis's components along the other box's axes.
  * Broadphase pairs of boxes whose bounding boxes overlap mostly end here.
- * Otherwise the hint is dropped (the full search answers exactly as with
- * it) and 0 returned. The separations are mk_sat_box_box's with that hint,
- * to rounding. */
+ * Otherwise the hint is dropped (an axis that no longer separates by more
+ * than the margin changes no answer) and 0 returned. The separations are
+ * mk_sat_box_box's along the same axes, to rounding. This is the boxes'
+ * form of mk_sat_options.first, which mk_sat_box_box does not take: done
+ * here, it needs no relative pose at all. */
 static int stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache)
 {
     mk_sat_kind kind = (mk_sat_kind)(cache->axis - MK_MF_APART_HINT);
@@ -674,8 +608,6 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
     }
     p = mk_pair_of_poses_(a, xa, b, xb);
     opt.stop_above = margin + ra + rb;
-    opt.first = MK_SAT_NONE; /* the hint was tested above */
-    opt.first_a = opt.first_b = -1;
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
     opt.prefer_rel = MK_MF_PREFER_REL;
     opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0 : MK_MF_PREFER_ABS * mk_min(min3(ha), min3(hb));

@@ -176,7 +176,8 @@ static inline mk_real mk_mf_edge_contact(const mk_pair *p, int ea, int eb, mk_re
  * last frame along the SAT axis of kind axis - MK_MF_APART_HINT, whose
  * indices a and b + 1 are kept in cache->reference and cache->face (which
  * a polytope pair does not otherwise carry across frames). A pair that
- * stays apart then costs one axis (mk_sat_options.first). */
+ * stays apart then costs one axis (mk_sat_options.first; two boxes:
+ * box_box.c's stay_apart). */
 #define MK_MF_APART_HINT 4
 
 /* ---- two boxes (box_box.c) ---- */

@@ -71,7 +71,10 @@ typedef struct mk_sat_options {
      * reports it, so a pair that stays apart costs one axis instead of up
      * to every face (a hull pair of 32 points apart: 1.4k instructions per
      * mk_collide instead of 10k); otherwise the answer is exactly the one
-     * without it. MK_SAT_NONE (the default): none. */
+     * without it. MK_SAT_NONE (the default): none. mk_sat only:
+     * mk_sat_box_box ignores it, as two boxes test last frame's axis from
+     * their world poses before any relative pose is built (box_box.c's
+     * stay_apart, mk_sat_box_box_edge_apart). */
     mk_sat_kind first;
     int first_a, first_b;
 } mk_sat_options;
@@ -134,16 +137,19 @@ void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, con
 /* The same for two box cores of half-extents ha and hb, by the 15 axes in
  * closed form (about 20 times fewer instructions than mk_sat on box views).
  * The answer is mk_sat's on mk_box_hull views of the boxes, indices included
- * (edges as the lower half-edge of the box view). */
+ * (edges as the lower half-edge of the box view); opt->first is not read
+ * (see mk_sat_options). */
 void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out);
 
-/* The first test of mk_sat_box_box with an edge pair hint (opt->first =
- * MK_SAT_EDGES, first_a = ia, first_b = ib) for boxes of half-extents ha
- * and hb, from their two world poses before any relative pose is built:
- * only the two rows of R and entries of t the axis needs. Returns 1 with
- * *out as mk_sat_box_box with that hint reports it (bit for bit) when the
- * boxes separate along it by more than stop; else 0 (*out untouched). The
- * face axes' twin of this is box_box.c's stay_apart. */
+/* The separation of boxes of half-extents ha and hb along one edge pair
+ * (half-edges ia of A and ib of B, as mk_sat_box_box names them), from
+ * their two world poses before any relative pose is built: only the two
+ * rows of R and entries of t the axis needs (last frame's separating axis,
+ * as mk_sat_options.first is for mk_sat). Returns 1 with *out filled as
+ * mk_sat_box_box reports an edge pair (kind, indices, normal, separation;
+ * best = separation, complete = 0) when the boxes separate along it by
+ * more than stop; else 0 (*out untouched). The face axes' twin of this is
+ * box_box.c's stay_apart. */
 int mk_sat_box_box_edge_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_pose *xa, const mk_pose *xb, int ia, int ib, mk_real stop,
                               mk_sat_result *out);
 

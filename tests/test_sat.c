@@ -554,18 +554,16 @@ START_TEST(hysteresis)
 }
 END_TEST
 
-/* The first-axis hint (mk_sat_options.first): apart pairs, hinted with
- * the axis an early-stopping run reported, stop on it at once with the
- * same answer; penetrating pairs, whatever the hint, get the full answer.
- * Hulls through mk_sat, boxes through mk_sat_box_box. */
-static void hinted(const mk_hull *a, const mk_hull *b, const mk_vec3 *boxes, const mk_mat3 *R, mk_vec3 t, mk_sat_result *out,
+/* SAT of the pair: hulls through mk_sat, two boxes (half extents in
+ * boxes) through mk_sat_box_box. */
+static void sat_of(const mk_hull *a, const mk_hull *b, const mk_vec3 *boxes, const mk_mat3 *R, mk_vec3 t, mk_sat_result *out,
                    const mk_sat_options *o)
 {
     if (boxes) mk_sat_box_box(boxes[0], boxes[1], R, t, o, out);
     else mk_sat(a, b, R, t, o, out);
 }
 
-/* The pair of the hinted() tests: two boxes (half extents in hx) when
+/* The pair of the sat_of() tests: two boxes (half extents in hx) when
  * `box`, else two ellipsoid hulls of n points that the caller destroys. */
 static void random_pair(mk_rng *r, int box, int n, mk_vec3 hx[2], mk_box_hull *A, mk_box_hull *B, mk_hull **ha, mk_hull **hb,
                         const mk_hull **a, const mk_hull **b)
@@ -583,6 +581,11 @@ static void random_pair(mk_rng *r, int box, int n, mk_vec3 hx[2], mk_box_hull *A
     }
 }
 
+/* The first-axis hint (mk_sat_options.first): apart pairs, hinted with
+ * the axis an early-stopping run reported, stop on it at once with the
+ * same answer; penetrating pairs, whatever the hint, get the full answer.
+ * Only mk_sat takes the hint (a box meets a hull as its box view, so half
+ * the pairs here are two box views); mk_sat_box_box ignores it. */
 START_TEST(first_axis_hint)
 {
     mk_rng r = {26};
@@ -598,14 +601,14 @@ START_TEST(first_axis_hint)
         mk_sat_options o = mk_sat_defaults();
         mk_sat_result base, quick, hint;
         random_pair(&r, box, 16, hx, &A, &B, &ha, &hb, &a, &b);
-        hinted(a, b, box ? hx : NULL, &R, t, &base, &o);
+        mk_sat(a, b, &R, t, &o, &base);
         o.stop_above = 0;
-        hinted(a, b, box ? hx : NULL, &R, t, &quick, &o);
+        mk_sat(a, b, &R, t, &o, &quick);
         if (base.best > 0) {
             o.first = quick.kind;
             o.first_a = quick.a;
             o.first_b = quick.b;
-            hinted(a, b, box ? hx : NULL, &R, t, &hint, &o);
+            mk_sat(a, b, &R, t, &o, &hint);
             REQUIRE(!hint.complete && hint.kind == quick.kind && hint.a == quick.a && hint.b == quick.b, "case %d: hint not taken", i);
             REQUIRE(fabsl((ld)hint.best - (ld)quick.separation) <= val_tol(4) && hint.best > 0, "case %d: hinted separation %.17g, %.17g", i,
                     (double)hint.best, (double)quick.separation);
@@ -617,7 +620,7 @@ START_TEST(first_axis_hint)
             o.first = (mk_sat_kind)(1 + i % 3);
             o.first_a = o.first == MK_SAT_FACE_B ? -1 : o.first == MK_SAT_EDGES ? (box ? 3 : 0) : 1;
             o.first_b = o.first == MK_SAT_FACE_A ? -1 : o.first == MK_SAT_EDGES ? (box ? 5 : 1) : 0;
-            hinted(a, b, box ? hx : NULL, &R, t, &hint, &o);
+            mk_sat(a, b, &R, t, &o, &hint);
             REQUIRE(hint.complete && hint.best == base.best && hint.kind == base.kind && hint.a == base.a && hint.b == base.b,
                     "case %d: a hint changed a penetrating answer", i);
             ++full;
@@ -649,12 +652,12 @@ START_TEST(better_face_not_held)
         mk_sat_result base, warm;
         mk_sat_kind k;
         random_pair(&r, box, 12, hx, &A, &B, &ha, &hb, &a, &b);
-        hinted(a, b, box ? hx : NULL, &R, t, &base, &o);
+        sat_of(a, b, box ? hx : NULL, &R, t, &base, &o);
         o.hold_face = 0;
         o.prefer_abs = (mk_real)1e9;
         for (k = MK_SAT_FACE_A; k <= MK_SAT_EDGES; ++k) {
             o.prefer = k;
-            hinted(a, b, box ? hx : NULL, &R, t, &warm, &o);
+            sat_of(a, b, box ? hx : NULL, &R, t, &warm, &o);
             REQUIRE(warm.best == base.best, "case %d: the depth changed", i);
             REQUIRE(warm.kind != MK_SAT_EDGES, "case %d: an edge pair beat a face by 1e9", i);
             if (base.kind != MK_SAT_EDGES) {
@@ -666,7 +669,7 @@ START_TEST(better_face_not_held)
                 mk_sat_options c = o;
                 mk_sat_result other;
                 c.prefer = k == MK_SAT_FACE_A ? MK_SAT_FACE_B : MK_SAT_FACE_A;
-                hinted(a, b, box ? hx : NULL, &R, t, &other, &c);
+                sat_of(a, b, box ? hx : NULL, &R, t, &other, &c);
                 REQUIRE(other.kind == warm.kind && other.separation == warm.separation, "case %d: the face depends on the preference", i);
                 edges += k == MK_SAT_FACE_A;
             }
