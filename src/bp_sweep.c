@@ -24,11 +24,12 @@
  * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
  * quantisation, rows; made with headroom) and start from the last sweep's
  * order, so a coherent scene needs an insertion sort, O(n), instead of the
- * radix sort; a plan is remade when it is old, when boxes crowd the ends
+ * radix sort (boxes that changed rows are sorted apart and merged in); a plan is remade when it is old, when boxes crowd the ends
  * of its ranges, or when a box is taller than its rows (the one thing that
  * would make it wrong).
  *
- * Cost: O(n) keys, one insertion sort bounded to 4 moves per box or one
+ * Cost: O(n) keys, one insertion sort bounded to 4 moves per box (plus a
+ * radix sort of the boxes that changed rows, at most about n / 8) or one
  * radix sort of n keys (a few byte passes), and for each box the boxes of
  * its three rows that overlap it on the sweep axis. */
 #include <math.h>
@@ -415,12 +416,16 @@ static int keys_by_slot(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k
 
 /* The same keys in the order of the last sweep (key[0, w->n) and the big
  * list of the last sweep): with a coherent scene and the same plan they
- * come out nearly sorted. The last sweep's boxes are the ones in the source
- * now but for those added since: proxies created since the last update
- * (flag NEW in the dirty list), or the caller's boxes past the last count;
- * the new ones go last, after any that stopped being big. tmp holds them
- * meanwhile. */
-static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k)
+ * come out nearly sorted, into key[0, returned count). The last sweep's
+ * boxes are the ones in the source now but for those added since: proxies
+ * created since the last update (flag NEW in the dirty list), or the
+ * caller's boxes past the last count. Those, any that stopped being big,
+ * and the boxes that changed rows go to tmp[0, *extra) instead: a box that
+ * changed rows is a row's length away from its place in the order (boxes
+ * lined up in a corridor cross the row line every frame), so sorting it
+ * apart and merging it in is cheaper than moving it there one place at a
+ * time. */
+static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, int *extra_out, keying_ *k)
 {
     mk_bp *bp = v->bp;
     int n = 0, extra = 0, i, nb = 0;
@@ -434,12 +439,29 @@ static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, keyi
         for (s = w->src_n; s < v->n; ++s) file_box(w, v, s, w->tmp, &extra, &nb, k);
     }
     for (i = 0; i < w->n; ++i) {
-        s = (uint32_t)(w->key[i] & 0xFFFFFFu);
-        if (src_in(v, s)) file_box(w, v, s, w->key, &n, &nb, k);
+        uint64_t old = w->key[i], key;
+        const mk_aabb *b;
+        s = (uint32_t)(old & 0xFFFFFFu);
+        if (!src_in(v, s)) continue;
+        b = src_box(v, s);
+        if (is_big(&w->f, b)) { w->big[nb++] = s; continue; }
+        key = key_of(&w->f, b, s, k);
+        if ((key ^ old) >> 40) w->tmp[extra++] = key; /* another row */
+        else w->key[n++] = key;                      /* n <= i: not read again */
     }
-    for (i = 0; i < extra; ++i) w->key[n++] = w->tmp[i];
     *nbig = nb;
+    *extra_out = extra;
     return n;
+}
+
+/* key[0, n) sorted, tmp[0, m) not, n + m keys of room in key: all of them
+ * sorted into key. The radix sort of tmp borrows key[n, n + m) as scratch;
+ * the merge runs from the back, so it never overwrites a key not yet read. */
+static void merge_in(uint64_t *key, int n, uint64_t *tmp, int m)
+{
+    int i = n - 1, j = m - 1, o = n + m - 1;
+    mk_sort_u64_by_(tmp, key + n, m, 3);
+    while (j >= 0) key[o--] = i >= 0 && key[i] > tmp[j] ? key[i--] : tmp[j--];
 }
 
 /* Insertion sort that gives up once it has moved keys `budget` places
@@ -484,9 +506,17 @@ static int sort_keys(struct mk_sweep *w, const src_ *v, int reuse, int *nbig)
     keying_ k = {0, 0};
     int n = 0, i, sorted = 0, keep = reuse && !w->crowded && w->age < MK_SWEEP_PLAN_AGE_;
     if (keep && w->sort_wait == 0) {
-        n = keys_in_last_order(w, v, nbig, &k);
-        if (!k.tall && !(sorted = insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
-        if (sorted) w->sort_backoff = 0;
+        int m;
+        n = keys_in_last_order(w, v, nbig, &m, &k);
+        /* past an eighth of the boxes apart, the scene is not coherent */
+        if (!k.tall && !(sorted = m <= n / 8 + 64 && insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
+        if (sorted) {
+            merge_in(w->key, n, w->tmp, m);
+            w->sort_backoff = 0;
+        } else {
+            memcpy(w->key + n, w->tmp, (size_t)m * sizeof *w->key);
+        }
+        n += m;
     } else if (keep) { /* the plan without the order: keys in slot order, sequential reads */
         w->sort_wait--;
         n = keys_by_slot(w, v, nbig, &k);
