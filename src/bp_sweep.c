@@ -1,8 +1,9 @@
 /* bp_sweep.c: every overlapping pair from scratch, with no pairs kept between
  * calls: a sort and sweep in rows. It serves a pairs_only SAP's busy updates
  * (the proxies' boxes, statics among them, pairs reported to the pair
- * table) and mk_bp_sweep_boxes (a caller's array of boxes, the pairs handed
- * out as found, with no proxies, pair table or per-pair call at all).
+ * table, or kept as found for the set alone) and mk_bp_sweep_boxes (a
+ * caller's array of boxes, the pairs handed out as found, with no proxies,
+ * pair table or per-pair call at all).
  *
  * Why rows: a plain sort and sweep on one axis tests every pair that
  * overlaps on that axis, and on a scene spread over a plane (ODE's exploded
@@ -258,7 +259,8 @@ typedef struct sweep_ctx_ {
     mk_bp *bp;
     const src_ *v;
     struct mk_sweep *w;
-    report_fn report;     /* proxies: each pair goes there; NULL: pairs go to w->out */
+    report_fn report;     /* each pair goes there; NULL: pairs go to w->out */
+    int statics;          /* proxies, statics among them: static-static pairs are left out */
 } sweep_ctx_;
 
 /* w->out is full: double it, unless the caller fixed the capacity. */
@@ -276,14 +278,15 @@ static mk_status grow_out(const sweep_ctx_ *c)
     return MK_OK;
 }
 
-/* An overlapping pair: to the proxies' report (no static-static pair), or
- * into w->out. */
+/* An overlapping pair (no static-static pair): to the report, or into
+ * w->out, with no call (a pairs_only SAP's set comes from there). */
 static inline mk_status emit(const sweep_ctx_ *c, uint32_t a, uint32_t b)
 {
     struct mk_sweep *w = c->w;
     mk_status st;
     int i;
-    if (c->report) return mk_bp_both_static_(c->bp, a, b) ? MK_OK : c->report(c->bp, a, b);
+    if (c->statics && mk_bp_both_static_(c->bp, a, b)) return MK_OK;
+    if (c->report) return c->report(c->bp, a, b);
     if ((i = w->nout) == w->outcap && (st = grow_out(c)) != MK_OK) return st;
     w->out[i].a = a < b ? a : b;
     w->out[i].b = a < b ? b : a;
@@ -599,9 +602,15 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
     mk_status st;
     if ((st = ensure(bp)) != MK_OK) return st;
     v = proxies_of(bp);
-    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = report;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = report; c.statics = bp->statics > 0;
     /* The arrays describe the last sweep only if the last update was one. */
     return run(&c, KEPT_PROXIES, bp->swept);
+}
+
+const mk_bp_pair *mk_sweep_found_(const mk_bp *bp, int *count)
+{
+    *count = bp->sweep->nout;
+    return bp->sweep->out;
 }
 
 mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n, const mk_bp_pair **pairs, int *count)
@@ -617,7 +626,7 @@ mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n,
     v.base = (const char *)boxes;
     v.stride = stride;
     v.n = (uint32_t)n;
-    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = NULL;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = NULL; c.statics = 0;
     if ((st = run(&c, KEPT_BOXES, 1)) != MK_OK) return st;
     *pairs = c.w->out;
     *count = c.w->nout;
