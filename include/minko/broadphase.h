@@ -48,7 +48,8 @@
  *                spread is swept, the next one cut into rows as tall as the
  *                tallest box, one sort of n keys (radix, or insertion from
  *                the last sweep's order when sweeps follow each and the
- *                scene is coherent: O(n)), and each box meets
+ *                scene is coherent: O(n), the boxes that changed rows
+ *                sorted apart and merged in), and each box meets
  *                the boxes of its own and the next row that overlap it on
  *                the swept axis: O(n + those meetings + p) (the pairs are
  *                bucketed by their lower slot to sort them); a box
