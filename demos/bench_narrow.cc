@@ -3,7 +3,8 @@
 // Every case family of tests/support/cases.h (seeded, with exact long double
 // references from the oracle) goes through every backend, one after another,
 // in one process run: ns per query (best of several timed loops over the
-// whole group, warm caches), relative error of distance / depth, normal error,
+// whole group, every backend warm and interleaved: see "timing" below),
+// relative error of distance / depth, normal error,
 // wrong booleans, failures. JSON Lines per ../shared/BENCH_FORMAT.md (suite
 // "narrow", --json FILE) and a table with the verdicts.
 //
@@ -28,6 +29,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <memory>
 #include <string>
 #include <vector>
@@ -808,8 +810,9 @@ void reap(pid_t pid, int fd)
 
 struct Outcome {
     bool prepared = false;
-    double ns = NAN;           // per query, over the cases that answered
+    double ns = NAN;           // per query, over the good cases
     std::vector<Answer> ans;   // failed = true for a hang or crash
+    std::vector<char> good;    // answered without hanging or crashing
 };
 
 // Child: answer cases [from, n) one by one, streaming (index, answer).
@@ -824,57 +827,161 @@ void child_answer(Backend &b, const std::vector<const mk_case *> &cs, size_t fro
     }
 }
 
-// Best of `reps` timed loops over the cases with good[i] of a prepared
-// backend (each loop >= 200 queries; repeats stop once the loops have taken
-// 0.5 s), in ns per query.
-double time_good(Backend &b, size_t n, const std::vector<char> &good, int reps)
+// ---- timing: every backend of a group in one process, interleaved ---------------------------
+//
+// The first backend timed after a group's cases are loaded pays for loading
+// them (caches, branch predictors, copy-on-write faults in a fresh child), and
+// a backend timed alone in its own short child samples whatever load the
+// machine had in those few microseconds: two runs of one binary differed by up
+// to 2x on a row. So once the answers are in, one process prepares every
+// backend of the group, runs each once untimed over its cases (warm-up), then
+// times `reps` rounds; round r runs the backends in an order rotated by r, so
+// each takes every position and all of them sample the same load, and each
+// timed loop follows one untimed pass of its own backend (the loops before it
+// evicted its data: "warm caches" as before). A loop is >= 1000 queries and
+// >= 100 us; it is timed in thread CPU time, so time slices given to the other
+// processes of this shared machine do not count (wall time did: under load a
+// few-ms loop of a slow backend was rarely left alone). ns per query is the
+// best (minimum) loop of each backend, the same statistic for all (load only
+// ever adds time). Rounds stop early, after 3, once the group's loops have
+// taken 1 s of CPU time. A backend measures only the cases it answered
+// without hanging or crashing (its `good` ones).
+
+struct Lane {
+    Backend *b;
+    std::vector<char> good;
+    size_t n_good;
+    size_t inner; // passes per timed loop
+    double ns;    // best loop, ns per query (NaN until timed)
+};
+
+const int MIN_ROUNDS = 3;
+const double ROUND_BUDGET_NS = 1e9;
+const size_t LOOP_QUERIES = 1000;
+const double LOOP_MIN_NS = 1e5;
+
+double cpu_ns()
 {
-    std::vector<Answer> ans(n);
-    size_t n_good = 0;
-    double best = HUGE_VAL, spent = 0;
-    for (char g : good) n_good += g;
-    if (n_good == 0) return NAN;
-    auto pass = [&]() {
-        for (size_t lo = 0; lo < n;) {
-            size_t hi = lo;
-            while (hi < n && good[hi]) ++hi;
-            if (hi > lo) b.run(lo, hi, ans.data());
-            lo = hi + 1;
-        }
-    };
-    int inner = (int)((200 + n_good - 1) / n_good);
-    pass(); // warm-up
-    for (int r = 0; r < reps && (r == 0 || spent < 5e8); ++r) {
-        double t = now_ns(), dt;
-        for (int k = 0; k < inner; ++k) pass();
-        dt = now_ns() - t;
-        best = std::min(best, dt), spent += dt;
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;
+}
+
+// One pass of a backend over its good cases.
+void pass(Lane &l, std::vector<Answer> &ans)
+{
+    for (size_t lo = 0, n = l.good.size(); lo < n;) {
+        size_t hi = lo;
+        while (hi < n && l.good[hi]) ++hi;
+        if (hi > lo) l.b->run(lo, hi, ans.data());
+        lo = hi + 1;
     }
-    return best / ((double)n_good * inner);
 }
 
-void child_time(Backend &b, const std::vector<const mk_case *> &cs, const std::vector<char> &good, int reps, int fd)
+// The schedule above. event(k, NaN) announces that lane k is about to
+// prepare or run (a crash or hang is then its fault); event(k, ns) reports
+// one timed loop. False if a lane fails to prepare.
+template <class Event>
+bool time_lanes(std::vector<Lane> &lanes, const std::vector<const mk_case *> &cs, int reps, Event event)
 {
-    double ns = b.prepare(cs) ? time_good(b, cs.size(), good, reps) : NAN;
-    write_all(fd, &ns, sizeof ns);
+    std::vector<Answer> ans(cs.size());
+    for (size_t k = 0; k < lanes.size(); ++k)
+        if (event(k, NAN), !lanes[k].b->prepare(cs)) return false;
+    for (size_t k = 0; k < lanes.size(); ++k) {
+        Lane &l = lanes[k];
+        event(k, NAN);
+        double t = cpu_ns();
+        pass(l, ans);
+        double once = std::max(cpu_ns() - t, 1.0);
+        l.inner = std::max((LOOP_QUERIES + l.n_good - 1) / l.n_good, (size_t)std::ceil(LOOP_MIN_NS / once));
+    }
+    double spent = 0;
+    for (int r = 0; r < reps && (r < MIN_ROUNDS || spent < ROUND_BUDGET_NS); ++r)
+        for (size_t j = 0; j < lanes.size(); ++j) {
+            size_t k = (j + (size_t)r) % lanes.size();
+            Lane &l = lanes[k];
+            event(k, NAN);
+            pass(l, ans); // the other backends' loops evicted this one's data: warm it again, untimed
+            double t = cpu_ns();
+            for (size_t i = 0; i < l.inner; ++i) pass(l, ans);
+            double dt = cpu_ns() - t;
+            spent += dt;
+            event(k, dt / (double)(l.n_good * l.inner));
+        }
+    return true;
 }
 
-// --inproc: the same measurement without child processes, for profilers
-// (valgrind --tool=callgrind); a backend that hangs hangs the run.
-Outcome run_inproc(Backend &b, const std::vector<const mk_case *> &cs, int reps)
+void keep_best(Lane &l, double ns)
+{
+    if (std::isnan(l.ns) || ns < l.ns) l.ns = ns;
+}
+
+// --inproc: the schedule in this process (for valgrind --tool=callgrind).
+void time_inproc(std::vector<Lane> &lanes, const std::vector<const mk_case *> &cs, int reps)
+{
+    time_lanes(lanes, cs, reps, [&](size_t k, double ns) {
+        if (!std::isnan(ns)) keep_best(lanes[k], ns);
+    });
+}
+
+// The schedule in a child that streams (lane, ns) records, lane -1 at the
+// end. If the child dies or hangs, the lane it was in gets no time and the
+// schedule starts again without it, so the other lanes' figures still come
+// from one process with every lane warm.
+void time_isolated(std::vector<Lane> &lanes, const std::vector<const mk_case *> &cs, int reps)
+{
+    struct Rec {
+        long lane;
+        double ns;
+    };
+    std::vector<Lane> live = lanes;
+    std::vector<size_t> id(lanes.size());
+    for (size_t k = 0; k < id.size(); ++k) id[k] = k;
+    while (!live.empty()) {
+        int fd;
+        pid_t pid = spawn(&fd);
+        if (pid == 0) {
+            Rec end = {-1, 0};
+            if (time_lanes(live, cs, reps, [&](size_t k, double ns) {
+                    Rec r = {(long)k, ns};
+                    if (!write_all(fd, &r, sizeof r)) _exit(1);
+                }))
+                write_all(fd, &end, sizeof end);
+            _exit(0);
+        }
+        if (pid < 0) return;
+        for (Lane &l : live) l.ns = NAN;
+        Rec r = {-2, 0};
+        long culprit = -1;
+        while (read_all(fd, &r, sizeof r, 600000) && r.lane >= 0) {
+            culprit = r.lane;
+            if (!std::isnan(r.ns)) keep_best(live[(size_t)r.lane], r.ns);
+        }
+        reap(pid, fd);
+        if (r.lane == -1) break;
+        if (culprit < 0) return; // died before any lane started: no times
+        live.erase(live.begin() + culprit);
+        id.erase(id.begin() + culprit);
+    }
+    for (size_t k = 0; k < live.size(); ++k) lanes[id[k]].ns = live[k].ns;
+}
+
+// --inproc answers: each backend in this process (a hang hangs the run).
+Outcome answer_inproc(Backend &b, const std::vector<const mk_case *> &cs)
 {
     Outcome o;
     o.ans.assign(cs.size(), Answer());
-    if (!(o.prepared = b.prepare(cs))) return o;
-    b.run(0, cs.size(), o.ans.data());
-    o.ns = time_good(b, cs.size(), std::vector<char>(cs.size(), 1), reps);
+    o.good.assign(cs.size(), 1);
+    if ((o.prepared = b.prepare(cs))) b.run(0, cs.size(), o.ans.data());
     return o;
 }
 
-Outcome run_isolated(Backend &b, const std::vector<const mk_case *> &cs, int reps)
+// Answers in child processes; a case that hangs or crashes is a failure
+// and leaves good[i] = 0.
+Outcome answer_isolated(Backend &b, const std::vector<const mk_case *> &cs)
 {
     Outcome o;
-    std::vector<char> good(cs.size(), 1);
+    o.good.assign(cs.size(), 1);
     o.ans.assign(cs.size(), Answer());
     for (size_t next = 0; next < cs.size();) {
         int fd, ok = 0;
@@ -894,7 +1001,7 @@ Outcome run_isolated(Backend &b, const std::vector<const mk_case *> &cs, int rep
             size_t i;
             Answer a;
             if (!read_all(fd, &i, sizeof i, CASE_TIMEOUT_MS) || !read_all(fd, &a, sizeof a, 1000)) {
-                o.ans[next] = Answer(), o.ans[next].failed = true, good[next] = 0; // hung or crashed
+                o.ans[next] = Answer(), o.ans[next].failed = true, o.good[next] = 0; // hung or crashed
                 ++next;
                 break;
             }
@@ -904,17 +1011,28 @@ Outcome run_isolated(Backend &b, const std::vector<const mk_case *> &cs, int rep
         }
         reap(pid, fd);
     }
-    int fd;
-    pid_t pid = spawn(&fd);
-    if (pid == 0) {
-        child_time(b, cs, good, reps, fd);
-        _exit(0);
-    }
-    if (pid > 0) {
-        if (!read_all(fd, &o.ns, sizeof o.ns, 600000)) o.ns = NAN;
-        reap(pid, fd);
-    }
     return o;
+}
+
+// Answers of every backend, then their times from one interleaved schedule.
+std::vector<Outcome> run_group(std::vector<std::unique_ptr<Backend>> &backends, const std::vector<const mk_case *> &cs,
+                               int reps, bool inproc)
+{
+    std::vector<Outcome> out;
+    std::vector<Lane> lanes;
+    std::vector<size_t> lane_of;
+    for (auto &b : backends) {
+        out.push_back(inproc ? answer_inproc(*b, cs) : answer_isolated(*b, cs));
+        const Outcome &o = out.back();
+        size_t n_good = (size_t)std::count(o.good.begin(), o.good.end(), 1);
+        if (o.prepared && n_good > 0) lanes.push_back(Lane{b.get(), o.good, n_good, 1, NAN}), lane_of.push_back(out.size() - 1);
+    }
+    if (reps > 0) {
+        if (inproc) time_inproc(lanes, cs, reps);
+        else time_isolated(lanes, cs, reps);
+    }
+    for (size_t k = 0; k < lanes.size(); ++k) out[lane_of[k]].ns = lanes[k].ns;
+    return out;
 }
 
 // ---- driver ------------------------------------------------------------------------------------------
@@ -987,7 +1105,7 @@ int selftest(std::vector<std::unique_ptr<Backend>> &backends)
     for (int i = 0; i < set.count; ++i)
         if (!std::strcmp(set.cases[i].variant, "libccd17_5m_vs_0.2m")) cs.push_back(&set.cases[i]);
     for (auto &b : backends) {
-        Outcome out = run_isolated(*b, cs, 1);
+        Outcome out = answer_isolated(*b, cs);
         const std::vector<Answer> &ans = out.ans;
         if (!out.prepared) continue;
         for (size_t i = 0; i < cs.size(); ++i) {
@@ -1011,7 +1129,8 @@ void usage(const char *argv0)
     std::fprintf(stderr,
                  "usage: %s [--quick] [--table] [--json FILE [--append]] [--family NAME]... [--variant NAME]... [--backend NAME]...\n"
                  "          [--n N] [--reps N] [--list] [--selftest] [--inproc]\n"
-                 "  --quick: 10 + 10 cases per family, 3 loops, summary only (--table adds every row)\n"
+                 "  --reps: timed rounds per group (default 20, --quick 3); each round times every backend once, in rotated order\n"
+                 "  --quick: 10 + 10 cases per family, 3 rounds, summary only (--table adds every row)\n"
                  "  --variant: separated, penetrating, or a regression's name (all by default)\n"
                  "  --inproc: no child processes (for valgrind --tool=callgrind; a hanging backend hangs the run)\n",
                  argv0);
@@ -1058,7 +1177,7 @@ int main(int argc, char **argv)
     if (o.selftest) return selftest(backends);
 
     const bool single = mk_is_double_precision() == 0;
-    const int reps = o.reps > 0 ? o.reps : o.quick ? 3 : 10;
+    const int reps = o.reps > 0 ? o.reps : o.quick ? 3 : 20;
     mk_case_set set;
     std::memset(&set, 0, sizeof set);
     double t0 = now_ns();
@@ -1066,9 +1185,11 @@ int main(int argc, char **argv)
         std::fprintf(stderr, "bench_narrow: case generation failed\n");
         return 1;
     }
-    std::printf("bench_narrow (%s build): %d cases with exact references in %.1f s; best of %d loops per group and backend\n"
-                "(fewer once a backend's loops pass 0.5 s); each backend runs in child processes: a case that hangs (> 2 s)\n"
-                "or crashes counts as a failure and is left out of the timing\n",
+    std::printf("bench_narrow (%s build): %d cases with exact references in %.1f s. Each backend answers in child\n"
+                "processes (a case that hangs > 2 s or crashes counts as a failure and is left out of the timing); then one\n"
+                "process per group warms every backend once, untimed, and times %d rounds (fewer, >= 3, once a group's\n"
+                "loops pass 1 s), each round every backend once in an order rotated by one; ns/query = the best loop\n"
+                "(>= 1000 queries and >= 100 us of thread CPU time, after one untimed pass) of each backend\n",
                 single ? "float" : "double", set.count, (now_ns() - t0) * 1e-9, reps);
     FILE *json = nullptr;
     if (o.json && !(json = std::fopen(o.json, o.append ? "a" : "w"))) {
@@ -1093,10 +1214,9 @@ int main(int argc, char **argv)
             continue;
         }
         std::vector<Row> rows;
-        for (auto &b : backends) {
-            Outcome out = o.inproc ? run_inproc(*b, cs, reps) : run_isolated(*b, cs, reps);
-            if (out.prepared) rows.push_back(measure(*b, cs, out.ans, out.ns));
-        }
+        std::vector<Outcome> out = run_group(backends, cs, reps, o.inproc);
+        for (size_t k = 0; k < backends.size(); ++k)
+            if (out[k].prepared) rows.push_back(measure(*backends[k], cs, out[k].ans, out[k].ns));
         report_group(rows, single, table, json, summary);
         std::fflush(stdout);
         all.insert(all.end(), rows.begin(), rows.end());

@@ -12,7 +12,7 @@
  * are then identical, which the `same` column checks against the first
  * backend of each case.
  *
- *   ode_scenes [--quick] [--json FILE] [--scene NAME] [--reps N] [--poses FILE]
+ *   ode_scenes [--quick] [--json FILE] [--scene NAME] [--reps N] [--poses FILE] [--frames A:B] [--per-frame FILE]
  *
  * Per case and backend: median ms per step (space collide, colliders = the
  * near-callback pass incl. contact joints, total incl. QuickStep), candidate
@@ -1057,13 +1057,27 @@ static void pose_bodies(const sim *s, const recording *r, int frame)
     }
 }
 
-static void run_space_only(const scene *sc, int reps, int from, int to, const char *poses_path, FILE *json)
+/* --per-frame FILE: one JSON line per measured frame and space (its best
+ * time and its pair count), to see where the mean goes. */
+static void write_per_frame(FILE *pf, const scene *sc, double *const *best, long long *const *fpairs, int from, int to)
+{
+    int f, b;
+    for (f = from; f < to; f++)
+        for (b = 0; b < NSPACE_ONLY; b++)
+            fprintf(pf,
+                    "{\"suite\":\"ode\",\"case\":\"stress_space_frame\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":1,"
+                    "\"frame\":%d,\"space_ms\":%.6g,\"pairs\":%lld}\n",
+                    sc->variant, SPACE_ONLY[b].be.name, f, best[b][f], fpairs[b][f]);
+}
+
+static void run_space_only(const scene *sc, int reps, int from, int to, const char *poses_path, FILE *json, FILE *pf)
 {
     recording rec;
     sim sims[NSPACE_ONLY];
     pair_sink sink = {NULL, 0, 0};
     pair *got[NSPACE_ONLY] = {NULL, NULL, NULL};
     size_t gotcap[NSPACE_ONLY] = {0, 0, 0}, ngot[NSPACE_ONLY];
+    long long *fpairs[NSPACE_ONLY];
     double *best[NSPACE_ONLY], med[NSPACE_ONLY], mean[NSPACE_ONLY], worst[NSPACE_ONLY], fastest_ode;
     int worst_at[NSPACE_ONLY];
     long long npairs[NSPACE_ONLY] = {0, 0, 0}, missing[NSPACE_ONLY] = {0, 0, 0}, extra[NSPACE_ONLY] = {0, 0, 0};
@@ -1077,6 +1091,7 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
     for (b = 0; b < NSPACE_ONLY; b++) {
         sim_init(&sims[b], &SPACE_ONLY[b].be, sc);
         best[b] = xrealloc(NULL, (size_t)rec.frames * sizeof(double));
+        fpairs[b] = xrealloc(NULL, (size_t)rec.frames * sizeof(long long));
         for (f = 0; f < rec.frames; f++) best[b][f] = HUGE_VAL;
     }
     for (rep = 0; rep < reps; rep++) {
@@ -1098,6 +1113,7 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
                 if (t < best[b][f]) best[b][f] = t;
                 if (rep == 0 && f >= from) {
                     npairs[b] += (long long)sink.n;
+                    fpairs[b][f] = (long long)sink.n;
                     canonical_pairs(&sink, &got[b], &gotcap[b]);
                     ngot[b] = sink.n;
                 }
@@ -1108,6 +1124,7 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
                         diff_pairs(got[b], ngot[b], got[SPACE_ONLY_MINKO], ngot[SPACE_ONLY_MINKO], &missing[b], &extra[b]);
         }
     }
+    if (pf) write_per_frame(pf, sc, best, fpairs, from, to); /* before median() sorts best[] */
     for (b = 0; b < NSPACE_ONLY; b++) {
         mean[b] = 0;
         worst[b] = -1;
@@ -1148,6 +1165,7 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
     }
     for (b = 0; b < NSPACE_ONLY; b++) {
         sim_free(&sims[b]);
+        free(fpairs[b]);
         free(best[b]);
         free(got[b]);
     }
@@ -1371,8 +1389,8 @@ static int make_cases(scene *out, int quick)
 int main(int argc, char **argv)
 {
     scene cases[MAXCASES];
-    const char *json_path = NULL, *only = NULL, *poses_path = NULL;
-    FILE *json = NULL;
+    const char *json_path = NULL, *only = NULL, *poses_path = NULL, *per_frame_path = NULL;
+    FILE *json = NULL, *per_frame = NULL;
     int quick = 0, reps = 3, from = 0, to = 0, ncases, i;
 
     for (i = 1; i < argc; i++) {
@@ -1386,19 +1404,26 @@ int main(int argc, char **argv)
             reps = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--poses") && i + 1 < argc)
             poses_path = argv[++i];
+        else if (!strcmp(argv[i], "--per-frame") && i + 1 < argc)
+            per_frame_path = argv[++i];
         else if (!strcmp(argv[i], "--frames") && i + 1 < argc && sscanf(argv[i + 1], "%d:%d", &from, &to) == 2)
             i++;
         else {
             fprintf(stderr,
                     "usage: %s [--quick] [--json FILE] [--scene stress|stress_space|tower|pyramid|hulls|mixed|wall|hull_depth]\n"
-                    "       [--reps N] [--poses FILE] [--frames A:B]   (stress_space: replays per frame; recorded frames,\n"
-                    "       read or written; the frames A..B-1 measured)\n",
+                    "       [--reps N] [--poses FILE] [--frames A:B] [--per-frame FILE]   (stress_space: replays per\n"
+                    "       frame; recorded frames, read or written; the frames A..B-1 measured; each frame's time and\n"
+                    "       pairs per space as JSON Lines)\n",
                     argv[0]);
             return 2;
         }
     }
     if (json_path && !(json = fopen(json_path, "w"))) {
         perror(json_path);
+        return 2;
+    }
+    if (per_frame_path && !(per_frame = fopen(per_frame_path, "w"))) {
+        perror(per_frame_path);
         return 2;
     }
     dInitODE2(0);
@@ -1412,11 +1437,12 @@ int main(int argc, char **argv)
     for (i = 0; i < ncases; i++) {
         if (!only || !strcmp(only, cases[i].name)) run_case(&cases[i], json);
         if (cases[i].build == build_stress && (!only || !strcmp(only, "stress_space")))
-            run_space_only(&cases[i], reps, from, to, poses_path, json);
+            run_space_only(&cases[i], reps, from, to, poses_path, json, per_frame);
     }
     if (!only || !strcmp(only, "hull_depth")) run_hull_depth(quick, json);
     for (i = 0; i < NHULLS; i++) hull_free(&hulls[i]);
     mk_ode_close();
     if (json) fclose(json);
+    if (per_frame) fclose(per_frame);
     return 0;
 }

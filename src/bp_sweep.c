@@ -16,32 +16,44 @@
  * little more, so rounding cannot hide a pair), so a box's partners start in
  * its own row or the next one up or down. Each box becomes one 64-bit key
  * (row, its lower end on the sweep axis quantised to 16 bits, slot) and one
- * radix sort orders them; each row is swept alone and then merged with the
- * row above. The quantisation is monotone, so comparing quantised values
- * never stops a sweep before a box it should have met; the exact closed
- * test on the AABBs decides. Boxes infinite on the row axis (ground planes)
+ * radix sort orders them; each row is swept alone and then against the row
+ * above. The inner loops read row << 16 | q, so one compare ends a scan
+ * at the box's end or at its row's end. The quantisation is monotone, so
+ * comparing quantised values never stops a sweep before a box it should
+ * have met; the exact closed test on the AABBs decides. Boxes infinite on the row axis (ground planes)
  * do not fit a row: they are tested against every box, O(n) each.
  *
  * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
  * quantisation, rows; made with headroom) and start from the last sweep's
  * order, so a coherent scene needs an insertion sort, O(n), instead of the
- * radix sort (boxes that changed rows are sorted apart and merged in); a plan is remade when it is old, when boxes crowd the ends
- * of its ranges, or when a box is taller than its rows (the one thing that
- * would make it wrong).
+ * radix sort (boxes that changed rows are sorted apart and merged in); a
+ * plan is remade when it is old, when boxes crowd the ends of its ranges,
+ * or when a box is taller than its rows (the one thing that would make it
+ * wrong).
  *
  * Cost: O(n) keys, one insertion sort bounded to 4 moves per box (plus a
  * radix sort of the boxes that changed rows, at most about n / 8) or one
- * radix sort of n keys (a few byte passes), and for each box the boxes of
- * its three rows that overlap it on the sweep axis. */
+ * radix sort of n keys (one counting pass, two or three scatter passes, the
+ * last one writing the sweep's arrays), and for each box the boxes of its
+ * three rows that overlap it on the sweep axis. */
 #include <math.h>
 #include <string.h>
 
 #include "broadphase_internal.h"
 
-/* 16-bit quantised positions: with the row in the next byte, the radix sort
- * takes three passes over the keys (the slot is payload, never sorted on). */
+/* 16-bit quantised positions and row numbers, so that row << 16 | q fits
+ * 32 bits; the last row is 0xFFFE, so that no such value reaches the
+ * sentinel 0xFFFFFFFF that ends the last row's scans. */
 #define MK_SWEEP_Q_MAX_ 0xFFFFu
-#define MK_SWEEP_ROWS_ 0xFFFFu     /* 16-bit row numbers */
+#define MK_SWEEP_ROWS_ 0xFFFEu
+#define MK_SWEEP_ROW_ 0x10000u     /* one row up, in row << 16 | q */
+#define MK_SWEEP_END_ 0xFFFFFFFFu  /* rlo[n]: above every box's rhi */
+
+/* The keys' 32 sort bits (row << 16 | q(lo), above 24 bits of slot) are
+ * radix-sorted in three digits of 12, 12 and 8 bits, whose histograms one
+ * counting pass makes; a digit that every key shares costs nothing (a scene
+ * spread over fewer than 256 rows: two passes). */
+#define MK_SWEEP_HIST_ (4096 + 4096 + 256)
 
 /* The frame of one sweep: axes, quantisation of the sweep axis, rows. */
 typedef struct frame_ {
@@ -52,8 +64,9 @@ typedef struct frame_ {
 } frame_;
 
 struct mk_sweep {
-    uint64_t *key, *tmp;  /* sort keys: row << 40 | q(lo) << 24 | slot */
-    uint32_t *qlo, *qhi;  /* per sorted box: q(lo), q(hi) on the sweep axis (the inner loops' reads) */
+    uint64_t *key, *tmp;  /* sort keys: row << 40 | q(lo) << 24 | slot (scratch once sorted) */
+    uint32_t *rlo, *rhi;  /* per sorted box: row << 16 | q(lo), row << 16 | q(hi) on the sweep axis (the
+                             inner loops' reads: one compare ends a scan at q or at its row's end); rlo[n] = END */
     uint32_t *slot;       /* per sorted box: its slot */
     mk_aabb *box;         /* per sorted box: its AABB (sequential reads in the sweep) */
     uint32_t *big;        /* slots of boxes infinite on the row axis */
@@ -68,6 +81,7 @@ struct mk_sweep {
     int crowded;          /* the last sweep clamped many boxes to the ends of f's ranges */
     int sort_wait;        /* sweeps left before an insertion sort is tried again */
     int sort_backoff;     /* the next wait, doubled each time one gives up */
+    uint32_t hist[MK_SWEEP_HIST_]; /* the radix sort's three histograms */
 };
 
 enum { KEPT_NONE = 0, KEPT_PROXIES, KEPT_BOXES };
@@ -75,9 +89,10 @@ enum { KEPT_NONE = 0, KEPT_PROXIES, KEPT_BOXES };
 /* The first size of the array of pairs a box sweep hands out. */
 #define MK_SWEEP_OUT_ 1024
 
-static size_t sweep_bytes_per_proxy(void)
+/* The per-box arrays of a sweep of capacity n (rlo has n + 1 entries). */
+static size_t sweep_bytes(size_t n)
 {
-    return 2 * sizeof(uint64_t) + 4 * sizeof(uint32_t) + sizeof(mk_aabb);
+    return n * (2 * sizeof(uint64_t) + 4 * sizeof(uint32_t) + sizeof(mk_aabb)) + sizeof(uint32_t);
 }
 
 static mk_status sweep_create(mk_bp *bp)
@@ -87,15 +102,15 @@ static mk_status sweep_create(mk_bp *bp)
     char *p;
     if (!(w = (struct mk_sweep *)mk_bp_alloc_(bp, sizeof *w))) return MK_ERR_OUT_OF_MEMORY;
     /* One block; the AABBs first for their alignment. */
-    if (!(p = (char *)mk_bp_alloc_(bp, n * sweep_bytes_per_proxy()))) {
+    if (!(p = (char *)mk_bp_alloc_(bp, sweep_bytes(n)))) {
         mk_bp_free_(bp, w, sizeof *w);
         return MK_ERR_OUT_OF_MEMORY;
     }
     w->box = (mk_aabb *)p; p += n * sizeof(mk_aabb);
     w->key = (uint64_t *)p; p += n * sizeof(uint64_t);
     w->tmp = (uint64_t *)p; p += n * sizeof(uint64_t);
-    w->qlo = (uint32_t *)p; p += n * sizeof(uint32_t);
-    w->qhi = (uint32_t *)p; p += n * sizeof(uint32_t);
+    w->rlo = (uint32_t *)p; p += (n + 1) * sizeof(uint32_t);
+    w->rhi = (uint32_t *)p; p += n * sizeof(uint32_t);
     w->slot = (uint32_t *)p; p += n * sizeof(uint32_t);
     w->big = (uint32_t *)p;
     w->cap = bp->cap;
@@ -104,7 +119,7 @@ static mk_status sweep_create(mk_bp *bp)
     w->nout = 0;
     w->outcap = MK_SWEEP_OUT_;
     if (!(w->out = (mk_bp_pair *)mk_bp_alloc_(bp, (size_t)w->outcap * sizeof *w->out))) {
-        mk_bp_free_(bp, w->box, n * sweep_bytes_per_proxy());
+        mk_bp_free_(bp, w->box, sweep_bytes(n));
         mk_bp_free_(bp, w, sizeof *w);
         return MK_ERR_OUT_OF_MEMORY;
     }
@@ -116,7 +131,7 @@ void mk_sweep_destroy_(mk_bp *bp)
 {
     struct mk_sweep *w = bp->sweep;
     if (!w) return;
-    mk_bp_free_(bp, w->box, (size_t)w->cap * sweep_bytes_per_proxy());
+    mk_bp_free_(bp, w->box, sweep_bytes((size_t)w->cap));
     mk_bp_free_(bp, w->out, (size_t)w->outcap * sizeof *w->out);
     mk_bp_free_(bp, w, sizeof *w);
     bp->sweep = NULL;
@@ -296,12 +311,12 @@ static inline mk_status emit(const sweep_ctx_ *c, uint32_t a, uint32_t b)
 
 /* The sorted arrays the inner loops read, in locals: emit may call out,
  * and its stores could alias them, so nothing is reloaded through c. */
-typedef struct rows_ { const uint32_t *qlo, *qhi, *slot; const mk_aabb *box; } rows_;
+typedef struct rows_ { const uint32_t *rlo, *rhi, *slot; const mk_aabb *box; } rows_;
 
 static rows_ rows_of(const struct mk_sweep *w)
 {
     rows_ r;
-    r.qlo = w->qlo; r.qhi = w->qhi; r.slot = w->slot; r.box = w->box;
+    r.rlo = w->rlo; r.rhi = w->rhi; r.slot = w->slot; r.box = w->box;
     return r;
 }
 
@@ -311,38 +326,39 @@ static inline mk_status test(const sweep_ctx_ *c, rows_ r, int i, int j)
     return emit(c, r.slot[i], r.slot[j]);
 }
 
-/* Pairs inside one row [s, e). */
+/* Pairs inside one row [s, e): rhi[i] is below the next row's rlo values
+ * (and the sentinel), so the scan needs no index bound. */
 static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
 {
     const rows_ r = rows_of(c->w);
     int i, j;
     mk_status st;
     for (i = s; i < e; ++i) {
-        uint32_t hi = r.qhi[i];
-        for (j = i + 1; j < e && r.qlo[j] <= hi; ++j)
+        uint32_t hi = r.rhi[i];
+        for (j = i + 1; r.rlo[j] <= hi; ++j)
             if ((st = test(c, r, i, j)) != MK_OK) return st;
     }
     return MK_OK;
 }
 
-/* Pairs between rows [s, e) and [t, u): a merge of the two sorted runs;
- * whichever box starts first scans the other run for the boxes starting
- * before it ends. */
+/* Pairs between row [s, e) and the row above, [t, u): a merge of the two
+ * sorted runs; whichever box starts first scans the other run for the
+ * boxes starting before it ends (its rhi moved to that row, which ends the
+ * scan at the run's end too). */
 static mk_status sweep_rows(const sweep_ctx_ *c, int s, int e, int t, int u)
 {
     const rows_ r = rows_of(c->w);
     mk_status st;
     int j;
     while (s < e && t < u) {
-        uint32_t ls = r.qlo[s], lt = r.qlo[t];
-        if (ls <= lt) {
-            uint32_t hi = r.qhi[s];
-            for (j = t; j < u && r.qlo[j] <= hi; ++j)
+        if (r.rlo[s] + MK_SWEEP_ROW_ <= r.rlo[t]) {
+            uint32_t hi = r.rhi[s] + MK_SWEEP_ROW_;
+            for (j = t; r.rlo[j] <= hi; ++j)
                 if ((st = test(c, r, s, j)) != MK_OK) return st;
             ++s;
         } else {
-            uint32_t hi = r.qhi[t];
-            for (j = s; j < e && r.qlo[j] <= hi; ++j)
+            uint32_t hi = r.rhi[t] - MK_SWEEP_ROW_;
+            for (j = s; r.rlo[j] <= hi; ++j)
                 if ((st = test(c, r, j, t)) != MK_OK) return st;
             ++t;
         }
@@ -417,7 +433,7 @@ static int keys_by_slot(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k
     return n;
 }
 
-/* The same keys in the order of the last sweep (key[0, w->n) and the big
+/* The same keys in the order of the last sweep (slot[0, w->n) and the big
  * list of the last sweep): with a coherent scene and the same plan they
  * come out nearly sorted, into key[0, returned count). The last sweep's
  * boxes are the ones in the source now but for those added since: proxies
@@ -442,15 +458,15 @@ static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, int 
         for (s = w->src_n; s < v->n; ++s) file_box(w, v, s, w->tmp, &extra, &nb, k);
     }
     for (i = 0; i < w->n; ++i) {
-        uint64_t old = w->key[i], key;
         const mk_aabb *b;
-        s = (uint32_t)(old & 0xFFFFFFu);
+        uint64_t key;
+        s = w->slot[i];
         if (!src_in(v, s)) continue;
         b = src_box(v, s);
         if (is_big(&w->f, b)) { w->big[nb++] = s; continue; }
         key = key_of(&w->f, b, s, k);
-        if ((key ^ old) >> 40) w->tmp[extra++] = key; /* another row */
-        else w->key[n++] = key;                      /* n <= i: not read again */
+        if ((uint32_t)(key >> 40) != w->rlo[i] >> 16) w->tmp[extra++] = key; /* another row */
+        else w->key[n++] = key;
     }
     *nbig = nb;
     *extra_out = extra;
@@ -496,6 +512,63 @@ static void insertion_gave_up(struct mk_sweep *w)
     w->sort_wait = w->sort_backoff;
 }
 
+/* Sorted box p is the box of key k: the arrays the sweep reads. */
+static inline void place(struct mk_sweep *w, const src_ *v, int p, uint64_t k)
+{
+    uint32_t s = (uint32_t)(k & 0xFFFFFFu), lo = (uint32_t)(k >> 24);
+    const mk_aabb *b = src_box(v, s);
+    w->box[p] = *b;
+    w->slot[p] = s;
+    w->rlo[p] = lo;
+    w->rhi[p] = (lo & ~MK_SWEEP_Q_MAX_) | quantise(&w->f, hi_of(b, w->f.ax));
+}
+
+/* The digits of the radix sort: shift in the key, size, offset in hist. */
+static const struct { int shift; uint32_t size, off; } DIGIT_[3] = {{24, 4096, 0}, {36, 4096, 4096}, {48, 256, 8192}};
+
+static inline uint32_t digit(uint64_t k, int d) { return (uint32_t)(k >> DIGIT_[d].shift) & (DIGIT_[d].size - 1); }
+
+/* Histograms of the three digits in one pass; returns the digits some keys
+ * differ in (in `need`, lowest first), each histogram turned into bucket
+ * starts. */
+static int radix_plan(uint32_t *h, const uint64_t *key, int n, int *need)
+{
+    int i, d, m = 0;
+    memset(h, 0, MK_SWEEP_HIST_ * sizeof *h);
+    for (i = 0; i < n; ++i) {
+        uint64_t k = key[i];
+        h[digit(k, 0)]++;
+        h[DIGIT_[1].off + digit(k, 1)]++;
+        h[DIGIT_[2].off + digit(k, 2)]++;
+    }
+    for (d = 0; d < 3; ++d) {
+        uint32_t *c = h + DIGIT_[d].off, sum = 0, b;
+        if (c[digit(key[0], d)] == (uint32_t)n) continue; /* all in one bucket */
+        for (b = 0; b < DIGIT_[d].size; ++b) { uint32_t t = c[b]; c[b] = sum; sum += t; }
+        need[m++] = d;
+    }
+    return m;
+}
+
+/* Stable LSD radix sort of key[0, n) by their sort bits, the last pass
+ * placing each box straight into the sweep's arrays (no pass of its own). */
+static void sort_and_place(struct mk_sweep *w, const src_ *v, int n)
+{
+    uint64_t *src = w->key, *dst = w->tmp, *sw;
+    int need[3], m = n ? radix_plan(w->hist, w->key, n, need) : 0, p, i;
+    for (p = 0; p < m; ++p) {
+        int d = need[p];
+        uint32_t *c = w->hist + DIGIT_[d].off;
+        if (p == m - 1) {
+            for (i = 0; i < n; ++i) place(w, v, (int)c[digit(src[i], d)]++, src[i]);
+            return;
+        }
+        for (i = 0; i < n; ++i) dst[c[digit(src[i], d)]++] = src[i];
+        sw = src; src = dst; dst = sw;
+    }
+    for (i = 0; i < n; ++i) place(w, v, i, src[i]); /* one bucket: in order already */
+}
+
 /* Sorted keys of the boxes that fit a row, the big ones listed apart, and
  * the per-box arrays the sweep reads. A sweep right after another one of
  * the same source (`reuse`) keeps its plan, unless it is old or boxes
@@ -532,26 +605,25 @@ static int sort_keys(struct mk_sweep *w, const src_ *v, int reuse, int *nbig)
         w->age = 0;
     }
     w->age++;
-    if (!sorted) mk_sort_u64_by_(w->key, w->tmp, n, 3); /* the slot is payload: input order breaks ties */
     w->crowded = k.clamped > n / 16 + 16;
-    for (i = 0; i < n; ++i) {
-        uint32_t s = (uint32_t)(w->key[i] & 0xFFFFFFu);
-        const mk_aabb *b = src_box(v, s);
-        w->box[i] = *b;
-        w->slot[i] = s;
-        w->qlo[i] = (uint32_t)(w->key[i] >> 24) & MK_SWEEP_Q_MAX_;
-        w->qhi[i] = quantise(f, hi_of(b, f->ax));
-    }
+    if (sorted)
+        for (i = 0; i < n; ++i) place(w, v, i, w->key[i]);
+    else
+        sort_and_place(w, v, n); /* the slot is payload: input order breaks ties */
+    w->rlo[n] = MK_SWEEP_END_;
     return n;
 }
 
-/* The end of the row that starts at i (n when i == n). */
+static uint32_t row_at(const struct mk_sweep *w, int i) { return w->rlo[i] >> 16; }
+
+/* The end of the row that starts at i (n when i == n: the sentinel's row
+ * is no box's). */
 static int row_end(const struct mk_sweep *w, int i, int n)
 {
-    uint64_t row;
+    uint32_t row;
     if (i == n) return n;
-    row = w->key[i] >> 40;
-    for (++i; i < n && w->key[i] >> 40 == row; ++i) {}
+    row = row_at(w, i);
+    for (++i; row_at(w, i) == row; ++i) {}
     return i;
 }
 
@@ -569,10 +641,9 @@ static mk_status run(const sweep_ctx_ *c, int kind, int reuse)
     w->kept = KEPT_NONE;
     w->nout = 0;
     for (s = 0, e = row_end(w, 0, n); s < n; s = e, e = u) {
-        uint64_t row = w->key[s] >> 40;
         u = row_end(w, e, n);
         if ((st = sweep_row(c, s, e)) != MK_OK) return st;
-        if (e < n && w->key[e] >> 40 == row + 1 && (st = sweep_rows(c, s, e, e, u)) != MK_OK) return st;
+        if (e < n && row_at(w, e) == row_at(w, s) + 1 && (st = sweep_rows(c, s, e, e, u)) != MK_OK) return st;
     }
     if ((st = sweep_big(c, n, nbig)) != MK_OK) return st;
     w->kept = kind;
@@ -633,13 +704,13 @@ mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n,
     return MK_OK;
 }
 
-/* First index in [i, e) whose quantised lower end is above q (or, with
- * strict = 0, at least q): the sorted run [i, e) of one row. */
+/* First index in [i, e) whose rlo is above q (or, with strict = 0, at
+ * least q): the sorted run [i, e) of one row, q in that row. */
 static int first_above(const struct mk_sweep *w, int i, int e, uint32_t q, int strict)
 {
     while (i < e) {
         int mid = i + (e - i) / 2;
-        uint32_t v = w->qlo[mid];
+        uint32_t v = w->rlo[mid];
         if (strict ? v <= q : v < q) i = mid + 1;
         else e = mid;
     }
@@ -665,26 +736,27 @@ mk_status mk_sweep_count_(mk_bp *bp, double *tests)
     w->nbig = 0;
     w->kept = KEPT_NONE;
     for (s = 0; s < n; s = e) {
-        uint64_t row = w->key[s] >> 40;
-        for (e = s + 1; e < n && w->key[e] >> 40 == row; ++e) {}
-        for (u = e; u < n && w->key[u] >> 40 == row + 1; ++u) {}
+        e = row_end(w, s, n);
+        for (u = e; u < n && row_at(w, u) == row_at(w, s) + 1; ++u) {}
         for (i = s; i < e; ++i) {
-            t += first_above(w, i + 1, e, w->qhi[i], 1) - (i + 1);
-            if (u > e) t += first_above(w, e, u, w->qhi[i], 1) - first_above(w, e, u, w->qlo[i], 0);
+            t += first_above(w, i + 1, e, w->rhi[i], 1) - (i + 1);
+            if (u > e)
+                t += first_above(w, e, u, w->rhi[i] + MK_SWEEP_ROW_, 1) - first_above(w, e, u, w->rlo[i] + MK_SWEEP_ROW_, 0);
         }
-        for (i = e; i < u; ++i) t += first_above(w, s, e, w->qhi[i], 1) - first_above(w, s, e, w->qlo[i], 1);
+        for (i = e; i < u; ++i)
+            t += first_above(w, s, e, w->rhi[i] - MK_SWEEP_ROW_, 1) - first_above(w, s, e, w->rlo[i] - MK_SWEEP_ROW_, 1);
     }
     *tests = t + (double)nbig * n;
     return MK_OK;
 }
 
 /* First sorted index in [i, n) whose row is at least `row`. */
-static int row_start(const struct mk_sweep *w, int i, uint64_t row)
+static int row_start(const struct mk_sweep *w, int i, uint32_t row)
 {
     int hi = w->n;
     while (i < hi) {
         int mid = i + (hi - i) / 2;
-        if (w->key[mid] >> 40 < row) i = mid + 1;
+        if (row_at(w, mid) < row) i = mid + 1;
         else hi = mid;
     }
     return i;
@@ -697,12 +769,12 @@ void mk_sweep_query_(const mk_bp *bp, mk_aabb q, mk_bp_query_fn fn, void *ctx)
 {
     const struct mk_sweep *w = bp->sweep;
     const frame_ *f = &w->f;
-    uint64_t row = row_of(f, lo_of(&q, f->ay) - f->h), last = row_of(f, hi_of(&q, f->ay));
+    uint32_t row = row_of(f, lo_of(&q, f->ay) - f->h), last = row_of(f, hi_of(&q, f->ay));
     uint32_t qx = quantise(f, hi_of(&q, f->ax));
     int i = row_start(w, 0, row), j;
-    while (i < w->n && w->key[i] >> 40 <= last) {
-        row = w->key[i] >> 40;
-        for (; i < w->n && w->key[i] >> 40 == row && w->qlo[i] <= qx; ++i) {
+    while (i < w->n && row_at(w, i) <= last) {
+        row = row_at(w, i);
+        for (; w->rlo[i] <= (row << 16 | qx); ++i) { /* the row's end or the sentinel stops it */
             uint32_t s = w->slot[i];
             if (mk_bp_overlap_(&w->box[i], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
         }

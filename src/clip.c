@@ -30,21 +30,27 @@ mk_feature mk_box_edge(int ci, int cj)
     return E(4 * axis + ((ci >> lo) & 1) + 2 * ((ci >> hi) & 1));
 }
 
-/* Per face 2 * axis + positive: its corners counter-clockwise seen from
- * outside, and the box edges from each corner to the next (mk_box_edge of
- * the pair). */
-static const unsigned char box_face_corner[6][4] = {{4, 6, 2, 0}, {1, 3, 7, 5}, {1, 5, 4, 0}, {2, 6, 7, 3}, {2, 3, 1, 0}, {4, 5, 7, 6}};
-static const unsigned char box_face_edge[6][4] = {{6, 10, 4, 8}, {5, 11, 7, 9}, {9, 2, 8, 0}, {10, 3, 11, 1}, {1, 5, 0, 4}, {2, 7, 3, 6}};
+/* The face tables (manifold_internal.h): each edge is mk_box_edge of its two corners. */
+const unsigned char mk_box_face_corner_[6][4] = {{4, 6, 2, 0}, {1, 3, 7, 5}, {1, 5, 4, 0}, {2, 6, 7, 3}, {2, 3, 1, 0}, {4, 5, 7, 6}};
+const unsigned char mk_box_face_edge_[6][4] = {{6, 10, 4, 8}, {5, 11, 7, 9}, {9, 2, 8, 0}, {10, 3, 11, 1}, {1, 5, 0, 4}, {2, 7, 3, 6}};
+
+void mk_box_edge_ends(mk_vec3 h, int id, mk_vec3 *e0, mk_vec3 *e1)
+{
+    int axis = id / 4, lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2;
+    int bits = ((id & 1) << lo) | (((id >> 1) & 1) << hi);
+    *e0 = mk_box_corner(h, bits);
+    *e1 = mk_box_corner(h, bits | 1 << axis);
+}
 
 void mk_box_face(const mk_shape *s, int axis, int positive, mk_feat *f)
 {
     int face = 2 * axis + positive, i;
     mk_vec3 h = s->u.half_extents;
     for (i = 0; i < 4; ++i) {
-        int c = box_face_corner[face][i];
+        int c = mk_box_face_corner_[face][i];
         f->v[i] = mk_v3(c & 1 ? h.x : -h.x, c & 2 ? h.y : -h.y, c & 4 ? h.z : -h.z);
         f->vid[i] = V(c);
-        f->eid[i] = E(box_face_edge[face][i]);
+        f->eid[i] = E(mk_box_face_edge_[face][i]);
     }
     f->count = 4;
     f->exact = 1;
@@ -513,193 +519,6 @@ void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, 
     }
     n = inc->count == 2 ? clip_segment(ref, inc, sp, nsp, out) : clip_polygon(ref, inc, sp, nsp, out);
     for (i = 0; i < n; ++i) emit(m, ref, ref_is_a, out[i].p, out[i].fref, out[i].finc, ra, rb, inv_cos);
-}
-
-/* ---- box face against box face ---------------------------------------------- */
-
-/* mk_mf_clip of an incident box face against a reference box face, done in
- * the reference box's frame, where the reference face's side planes are
- * coordinate planes: a side test is one subtraction instead of a dot
- * product, and no polygon, side plane or centroid is built. The clipping
- * order, the slop (m->slop times the side's length, as
- * side_planes() sets it for a face), the naming of crossings and the
- * candidates' order are mk_mf_clip's, so the manifold and its feature IDs
- * are the same. */
-
-/* Side q of face f (from corner q to q + 1): the axis it bounds, the sign
- * of its outward normal on that axis, and the axis it runs along. */
-static const signed char box_face_side[6][4][3] = {{{2, 1, 1}, {1, 1, 2}, {2, -1, 1}, {1, -1, 2}},
-                                                   {{2, -1, 1}, {1, 1, 2}, {2, 1, 1}, {1, -1, 2}},
-                                                   {{0, 1, 2}, {2, 1, 0}, {0, -1, 2}, {2, -1, 0}},
-                                                   {{0, -1, 2}, {2, 1, 0}, {0, 1, 2}, {2, -1, 0}},
-                                                   {{1, 1, 0}, {0, 1, 1}, {1, -1, 0}, {0, -1, 1}},
-                                                   {{1, -1, 0}, {0, 1, 1}, {1, 1, 0}, {0, -1, 1}}};
-
-/* A vertex of the incident face being clipped (clip_vert, coordinates as an array). */
-typedef struct box_vert {
-    mk_real c[3];
-    mk_feature fref, finc, edge;
-    signed char ref_edge; /* small, so a copy is a few wide moves */
-} box_vert;
-
-/* One Sutherland-Hodgman pass (clip_polygon's, with its slop rule) against
- * reference side q: keeps the part of src where sign * c[axis] - h <= slop.
- * One loop: each vertex's distance is found once, as the end of the edge
- * before it; a pass that cuts nothing copies the polygon (the caller skips
- * the sides no corner is outside of). */
-MK_ALWAYS_INLINE int clip_box_side(int face, int q, mk_feature finc_face, mk_real sign, int axis, mk_real h, mk_real slop, const box_vert *src,
-                         int n, box_vert *dst)
-{
-    int m = 0, i;
-    mk_real da = sign * src[0].c[axis] - h;
-    for (i = 0; i < n; ++i) {
-        const box_vert *a = &src[i], *b = &src[i + 1 < n ? i + 1 : 0];
-        mk_real db = sign * b->c[axis] - h;
-        int ina = da <= slop, inb = db <= slop;
-        if (ina) dst[m++] = *a;
-        if (ina != inb) {
-            if ((ina ? da : db) > 0) { /* the inside end stands for the crossing (clip_polygon) */
-                if (ina) {
-                    dst[m - 1].ref_edge = (signed char)q;
-                    dst[m - 1].edge = E(box_face_edge[face][q]);
-                }
-            } else {
-                box_vert *x = &dst[m++];
-                mk_real t = da / (da - db);
-                x->c[0] = a->c[0] + (b->c[0] - a->c[0]) * t;
-                x->c[1] = a->c[1] + (b->c[1] - a->c[1]) * t;
-                x->c[2] = a->c[2] + (b->c[2] - a->c[2]) * t;
-                if (a->ref_edge < 0) {
-                    x->fref = E(box_face_edge[face][q]);
-                    x->finc = a->edge;
-                } else {
-                    /* Along reference side pe and now crossing side q: the corner between them. */
-                    int pe = a->ref_edge;
-                    x->fref = pe == ((q + 3) & 3) ? V(box_face_corner[face][q]) : pe == ((q + 1) & 3) ? V(box_face_corner[face][(q + 1) & 3]) : F(face);
-                    x->finc = finc_face;
-                }
-                if (ina) { /* leaving: the next edge runs along side q */
-                    x->ref_edge = (signed char)q;
-                    x->edge = E(box_face_edge[face][q]);
-                } else { /* entering: the rest of a's edge */
-                    x->ref_edge = a->ref_edge;
-                    x->edge = a->edge;
-                }
-            }
-        }
-        da = db;
-    }
-    return m;
-}
-
-/* Appends the clipped vertices v within the margin as candidates, in A's
- * frame; with `reduce`, only the four mk_mf_pick4 keeps, chosen in the
- * reference face's own coordinates (exact there), so the others are never
- * moved to A's frame. */
-MK_ALWAYS_INLINE void emit_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce, const box_vert *v,
-                       int cnt)
-{
-    mk_vec3 hv = (ref_is_a ? p->a : p->b)->u.half_extents;
-    mk_real x[MK_MF_MAX], y[MK_MF_MAX], w[MK_MF_MAX], depth[MK_MF_MAX], sgn = face & 1 ? 1 : -1;
-    mk_real h = face < 2 ? hv.x : face < 4 ? hv.y : hv.z;
-    int k = face / 2, iu = (k + 1) % 3, iv = (k + 2) % 3, idx[MK_MF_MAX], pick[4], n = 0, i;
-    for (i = 0; i < cnt; ++i) {
-        mk_real wi = sgn * v[i].c[k] - h; /* height over the reference face */
-        if (!(ra + rb - wi >= -m->margin)) continue;
-        x[n] = v[i].c[iu];
-        y[n] = v[i].c[iv];
-        w[n] = wi;
-        depth[n] = ra + rb - wi;
-        idx[n++] = i;
-    }
-    if (reduce && n > MK_MANIFOLD_MAX_POINTS) {
-        int kept = mk_mf_pick4(n, x, y, depth, pick);
-        mk_real wk[4];
-        for (i = 0; i < kept; ++i) wk[i] = w[pick[i]], pick[i] = idx[pick[i]];
-        for (i = 0; i < kept; ++i) w[i] = wk[i], idx[i] = pick[i];
-        n = kept;
-    }
-    for (i = 0; i < n; ++i) {
-        const box_vert *c = &v[idx[i]];
-        mk_vec3 q = mk_v3(c->c[0], c->c[1], c->c[2]);
-        if (ref_is_a) mk_mf_add(m, mk_v3_mad(q, ra - w[i], m->normal), ra + rb - w[i], c->fref, c->finc);
-        else mk_mf_add(m, mk_v3_mad(mk_v3_add(mk_mat3_mul_v3(p->r, q), p->t), ra, m->normal), ra + rb - w[i], c->finc, c->fref);
-    }
-}
-
-MK_ALWAYS_INLINE void clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce)
-{
-    const mk_shape *ref = ref_is_a ? p->a : p->b, *inc = ref_is_a ? p->b : p->a;
-    mk_vec3 h = ref->u.half_extents, g = inc->u.half_extents, n = m->normal, d, col[3], tri, c0, cu, cv, s, t, corner[4];
-    mk_vec3 lo = mk_v3(MK_REAL_MAX, MK_REAL_MAX, MK_REAL_MAX), hi = mk_v3_neg(lo);
-    mk_real hh[3], gg[3], dd[3], lh[2][3];
-    box_vert buf[2][MK_MF_MAX];
-    int fi, ia, iu, iv, i, q, cnt = 4, cur = 0;
-    mk_real slop = m->cores_apart && ra + rb > 0 ? 0 : m->slop;
-    mk_feature finc_face;
-    /* The incident box in the reference frame: x_ref = col * x_inc + tri,
-     * and the direction whose support face is incident (as mk_mf_clip's
-     * callers ask mk_support_feature). */
-    if (ref_is_a) {
-        col[0] = p->r.c0, col[1] = p->r.c1, col[2] = p->r.c2;
-        tri = p->t;
-        d = mk_mat3_tmul_v3(p->r, mk_v3_neg(n));
-    } else {
-        mk_mat3 rt = mk_mat3_transpose(p->r);
-        col[0] = rt.c0, col[1] = rt.c1, col[2] = rt.c2;
-        tri = mk_v3_neg(mk_mat3_mul_v3(rt, p->t));
-        d = n;
-    }
-    dd[0] = mk_fabs_(d.x), dd[1] = mk_fabs_(d.y), dd[2] = mk_fabs_(d.z);
-    ia = (dd[0] >= dd[1] && dd[0] >= dd[2]) ? 0 : (dd[1] >= dd[2] ? 1 : 2); /* ties to the lower axis, as mk_support_feature */
-    fi = 2 * ia + ((ia == 0 ? d.x : ia == 1 ? d.y : d.z) >= 0);
-    finc_face = F(fi);
-    hh[0] = h.x, hh[1] = h.y, hh[2] = h.z;
-    gg[0] = g.x, gg[1] = g.y, gg[2] = g.z;
-    /* Corners: the face centre plus or minus the two in-face half axes. */
-    iu = (ia + 1) % 3, iv = (ia + 2) % 3;
-    c0 = mk_v3_mad(tri, fi & 1 ? gg[ia] : -gg[ia], col[ia]);
-    cu = mk_v3_scale(col[iu], gg[iu]);
-    cv = mk_v3_scale(col[iv], gg[iv]);
-    /* The corners c0 -+ cu -+ cv in box_face_corner's order: (-, -), (+, -),
-     * (+, +), (-, +) on a + face, reversed on a - face. */
-    s = mk_v3_add(cu, cv), t = mk_v3_sub(cu, cv);
-    corner[0] = mk_v3_sub(c0, s), corner[1] = mk_v3_add(c0, t), corner[2] = mk_v3_add(c0, s), corner[3] = mk_v3_sub(c0, t);
-    for (i = 0; i < 4; ++i) {
-        box_vert *x = &buf[0][i];
-        mk_vec3 v = corner[fi & 1 ? i : 3 - i];
-        x->c[0] = v.x, x->c[1] = v.y, x->c[2] = v.z;
-        x->fref = F(face);
-        x->finc = V(box_face_corner[fi][i]);
-        x->ref_edge = -1;
-        x->edge = E(box_face_edge[fi][i]);
-    }
-    /* The reference face's sides in its corner order; the slop is
-     * side_planes()' for a face, m->slop times the side's length. A side
-     * that no corner is outside of cuts nothing, and no crossing made by
-     * another side (a point between two corners) is outside it either: its
-     * pass is skipped. */
-    for (i = 0; i < 4; ++i) {
-        const box_vert *x = &buf[0][i];
-        lo = mk_v3(mk_min(lo.x, x->c[0]), mk_min(lo.y, x->c[1]), mk_min(lo.z, x->c[2]));
-        hi = mk_v3(mk_max(hi.x, x->c[0]), mk_max(hi.y, x->c[1]), mk_max(hi.z, x->c[2]));
-    }
-    lh[0][0] = -lo.x, lh[0][1] = -lo.y, lh[0][2] = -lo.z;
-    lh[1][0] = hi.x, lh[1][1] = hi.y, lh[1][2] = hi.z;
-    for (q = 0; q < 4 && cnt > 0; ++q) {
-        const signed char *sd = box_face_side[face][q];
-        mk_real side_slop = 2 * slop * hh[sd[2]];
-        if (!(lh[sd[1] > 0][sd[0]] - hh[sd[0]] <= side_slop))
-            cnt = clip_box_side(face, q, finc_face, sd[1], sd[0], hh[sd[0]], side_slop, buf[cur], cnt, buf[cur ^ 1]), cur ^= 1;
-    }
-    emit_boxes(m, p, ref_is_a, face, ra, rb, reduce, buf[cur], cnt);
-}
-
-/* With the reference box's side known, every index above is a constant. */
-void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce)
-{
-    if (ref_is_a) clip_boxes(m, p, 1, face, ra, rb, reduce);
-    else clip_boxes(m, p, 0, face, ra, rb, reduce);
 }
 
 /* ---- manifold from closest points ------------------------------------------ */

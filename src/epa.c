@@ -118,22 +118,24 @@ static int blow_up(const mk_pair *p, const mk_simplex *s, mk_real tol, mk_cso_ve
     return 1;
 }
 
-static int init_tetrahedron(epa_poly *P, const mk_cso_vertex *t)
+/* The tetrahedron blow_up left in P->v[0..4), turned to negative volume. */
+static int init_tetrahedron(epa_poly *P)
 {
     static const int faces[4][3] = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
     /* For edge i of face k: the face across it and that edge's index there. */
     static const int across[4][3][2] = {{{1, 2}, {3, 2}, {2, 0}}, {{2, 2}, {3, 0}, {0, 0}},
                                         {{0, 2}, {3, 1}, {1, 0}}, {{1, 1}, {2, 1}, {0, 1}}};
+    mk_cso_vertex *t = P->v;
     mk_vec3 e1 = mk_v3_sub(t[1].w, t[0].w), e2 = mk_v3_sub(t[2].w, t[0].w), e3 = mk_v3_sub(t[3].w, t[0].w);
     int k, ok = 1;
     P->nv = 4;
     P->nf = 4;
     P->nfree = 0;
-    for (k = 0; k < 4; ++k) P->v[k] = t[k];
     /* Negative volume makes every face of `faces` point away from its opposite vertex. */
     if (mk_v3_dot(e1, mk_v3_cross(e2, e3)) > 0) {
-        P->v[1] = t[2];
-        P->v[2] = t[1];
+        mk_cso_vertex x = t[1];
+        t[1] = t[2];
+        t[2] = x;
     }
     for (k = 0; k < 4; ++k) {
         int i;
@@ -291,17 +293,18 @@ static int expand(epa_poly *P, int f0, int wi)
     return 1;
 }
 
-/* Barycentric coordinates of the origin's projection on face f (clamped to it). */
+/* Barycentric coordinates of the origin's projection q = dist n on face F
+ * (clamped to it): twice the signed areas n . ((v_j - q) x (v_k - q)), which
+ * are n . (v_j x v_k) since q is along n. */
 static void face_weights(const epa_poly *P, const epa_face *F, mk_real *l)
 {
-    mk_vec3 q = mk_v3_scale(F->n, F->dist);
-    mk_real sum = 0;
+    mk_vec3 a = P->v[F->v[0]].w, b = P->v[F->v[1]].w, c = P->v[F->v[2]].w;
+    mk_real sum;
     int k;
-    for (k = 0; k < 3; ++k) {
-        mk_vec3 b = mk_v3_sub(P->v[F->v[(k + 1) % 3]].w, q), c = mk_v3_sub(P->v[F->v[(k + 2) % 3]].w, q);
-        l[k] = mk_max(0, mk_v3_dot(F->n, mk_v3_cross(b, c)));
-        sum += l[k];
-    }
+    l[0] = mk_max(0, mk_v3_dot(F->n, mk_v3_cross(b, c)));
+    l[1] = mk_max(0, mk_v3_dot(F->n, mk_v3_cross(c, a)));
+    l[2] = mk_max(0, mk_v3_dot(F->n, mk_v3_cross(a, b)));
+    sum = l[0] + l[1] + l[2];
     for (k = 0; k < 3; ++k) l[k] = sum > 0 ? l[k] / sum : MK_REAL(1.0) / 3;
 }
 
@@ -377,11 +380,10 @@ MK_ALWAYS_INLINE int epa_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type 
 {
     epa_poly P;
     epa_face best;
-    mk_cso_vertex t[4];
     int it, climb_a = climbs(p->a, ta), climb_b = climbs(p->b, tb);
     P.p = p;
     P.tol = MK_GJK_ABS_TOL * scale;
-    if (!blow_up(p, s, P.tol, t) || !init_tetrahedron(&P, t)) return flat_answer(p, s, out);
+    if (!blow_up(p, s, P.tol, P.v) || !init_tetrahedron(&P)) return flat_answer(p, s, out);
     out->state = MK_SOLVE_MAX_ITERATIONS;
     for (it = 0;; ++it) {
         int f = nearest_face(&P);

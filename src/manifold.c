@@ -68,11 +68,6 @@ static int segment_meets_box(mk_vec3 p0, mk_vec3 p1, mk_vec3 h)
     return 1;
 }
 
-static mk_vec3 box_corner(mk_vec3 h, int bits)
-{
-    return mk_v3(bits & 1 ? h.x : -h.x, bits & 2 ? h.y : -h.y, bits & 4 ? h.z : -h.z);
-}
-
 /* Closest points of a segment and a box it does not meet: an endpoint
  * against the box, or the segment against one of the 12 edges (a face can
  * only be nearest at an endpoint). */
@@ -89,7 +84,7 @@ static mk_real segment_box_closest(mk_vec3 p0, mk_vec3 p1, mk_vec3 h, mk_vec3 *c
         for (i = 0; i < 4; ++i) {
             /* Edge along axis k: the two corners that differ only in bit k. */
             int lo = k == 0 ? 1 : 0, hi = k == 2 ? 1 : 2, bits = ((i & 1) << lo) | ((i >> 1) << hi);
-            mk_vec3 e0 = box_corner(h, bits), e1 = box_corner(h, bits | 1 << k), q, p;
+            mk_vec3 e0 = mk_box_corner(h, bits), e1 = mk_box_corner(h, bits | 1 << k), q, p;
             mk_real d2;
             mk_segment_segment(e0, e1, p0, p1, &s, &t);
             q = mk_v3_lerp(e0, e1, s);
@@ -140,7 +135,7 @@ static void segment_box_deep(mk_vec3 p0, mk_vec3 p1, mk_vec3 h, mk_vec3 *n, mk_v
     } else {
         /* The box edge along `edge` on the side the normal points to. */
         int bits = (best_n.x > 0) | (best_n.y > 0) << 1 | (best_n.z > 0) << 2;
-        mk_vec3 e0 = box_corner(h, bits & ~(1 << edge)), e1 = box_corner(h, bits | 1 << edge);
+        mk_vec3 e0 = mk_box_corner(h, bits & ~(1 << edge)), e1 = mk_box_corner(h, bits | 1 << edge);
         mk_segment_segment(e0, e1, p0, p1, &s, &t);
         *ca = mk_v3_lerp(e0, e1, s);
         *cb = mk_v3_lerp(p0, p1, t);
@@ -185,7 +180,7 @@ static mk_status shape_plane(const mk_pair *p, mk_mf *m, mk_manifold_cache *cach
 }
 
 #ifndef MK_WITHOUT_SAT
-/* Face/edge hysteresis of box pairs (mk_sat_options.prefer): with
+/* Face/edge hysteresis of box and hull pairs (mk_sat_options.prefer): with
  * MK_MANIFOLD_STABLE_IDS last frame's
  * kind of face axis (face of A, face of B) is kept while its separation is
  * within 5 % of the best one's plus 0.5 % of the smaller box's smallest half
@@ -199,17 +194,7 @@ static mk_status shape_plane(const mk_pair *p, mk_mf *m, mk_manifold_cache *cach
  * 5e-7 (flat, 1e-3 rad) to 1.4 % (on edge, 1e-3 rad) of the exact one. A
  * 1 % band alone is too narrow at millimetre depths (433 flips at 1e-2 rad);
  * Box3D's rule (0.9 x face + 0.5 slop) is the same idea with a wider band. */
-#define MK_SAT_PREFER_REL MK_REAL(0.05)
-#define MK_SAT_PREFER_ABS MK_REAL(0.005)
-
-/* The two ends of box edge `id` (minko/manifold.h numbering). */
-static void box_edge_ends(mk_vec3 h, int id, mk_vec3 *e0, mk_vec3 *e1)
-{
-    int axis = id / 4, lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2;
-    int bits = ((id & 1) << lo) | (((id >> 1) & 1) << hi);
-    *e0 = box_corner(h, bits);
-    *e1 = box_corner(h, bits | 1 << axis);
-}
+/* (MK_MF_PREFER_REL and MK_MF_PREFER_ABS in manifold_internal.h.) */
 
 /* An edge pair whose cross product is a face normal (an edge of B lying
  * parallel to a face of A, as in every box resting flat on another) is that
@@ -241,35 +226,6 @@ static void face_axis(const mk_hull *ha, const mk_hull *hb, const mk_pair *p, mk
     }
 }
 
-/* The same for two boxes, without their hull views: an edge axis is a face
- * axis when the normal is one of A's axes (faces of A first, as SAT breaks
- * ties) or one of B's; the face is the one the normal leaves A through, or
- * enters B through. */
-static void box_face_axis(const mk_pair *p, mk_sat_result *sat)
-{
-    mk_real one = 1 - 64 * MK_REAL_EPSILON, n[3], nb[3];
-    mk_vec3 l = mk_mat3_tmul_v3(p->r, sat->normal);
-    int k;
-    n[0] = sat->normal.x, n[1] = sat->normal.y, n[2] = sat->normal.z;
-    nb[0] = l.x, nb[1] = l.y, nb[2] = l.z;
-    for (k = 0; k < 3; ++k) {
-        if (mk_fabs_(n[k]) >= one) {
-            sat->kind = MK_SAT_FACE_A;
-            sat->a = 2 * k + (n[k] > 0);
-            sat->b = -1;
-            return;
-        }
-    }
-    for (k = 0; k < 3; ++k) {
-        if (mk_fabs_(nb[k]) >= one) {
-            sat->kind = MK_SAT_FACE_B;
-            sat->a = -1;
-            sat->b = 2 * k + (nb[k] < 0);
-            return;
-        }
-    }
-}
-
 static mk_real min3(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
 
 /* The reference face `face` of polytope s (box or hull), in its own frame. */
@@ -286,7 +242,7 @@ static mk_feature polytope_edge(const mk_shape *s, int e, mk_vec3 *e0, mk_vec3 *
 {
     if (s->type == MK_SHAPE_BOX) {
         int id = mk_box_hull_edge_id(e);
-        box_edge_ends(s->u.half_extents, id, e0, e1);
+        mk_box_edge_ends(s->u.half_extents, id, e0, e1);
         return MK_FEATURE(MK_FEATURE_EDGE, id);
     } else {
         const mk_hull *h = s->u.hull;
@@ -326,13 +282,6 @@ static mk_status apart(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
 }
 #endif
 
-/* cache->axis above this: the pair was apart beyond the margin last frame
- * along the SAT axis of kind axis - APART_HINT, whose indices a and b + 1
- * are kept in cache->reference and cache->face (which a polytope pair
- * does not otherwise carry across frames). A pair that stays apart then
- * costs one axis (mk_sat_options.first). */
-#define APART_HINT 4
-
 /* Whether two polytopes (boxes, hulls) are farther apart than the margin by
  * their bounding balls about their origins: then nothing else is needed,
  * not even their rotations. Broadphase pairs of boxes that only overlap in
@@ -348,33 +297,7 @@ static int polytopes_apart(const mk_shape *a, mk_vec3 pa, const mk_shape *b, mk_
     return mk_v3_len2(mk_v3_sub(pb, pa)) > reach * reach;
 }
 
-/* Two boxes that were apart last frame and still are along the same axis:
- * that one axis straight from the world poses (mk_sat_box_box_hint_apart),
- * before the relative pose or anything else is built, and the hint kept for
- * the next frame (an edge axis stays named as one, even where polytopes()
- * would rename it as a face it has become parallel to: the same axis).
- * Broadphase pairs of boxes whose bounding boxes overlap mostly end here.
- * Otherwise the hint is dropped (the full search answers exactly as with
- * it) and 0 returned. */
-static int boxes_stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
-                            mk_manifold_cache *cache)
-{
-    mk_sat_result sat;
-    mk_real rr = a->radius + b->radius;
-    if (mk_sat_box_box_hint_apart(&a->u.half_extents, &b->u.half_extents, xa, xb, (mk_sat_kind)(cache->axis - APART_HINT), cache->reference,
-                                  (int)cache->face - 1, margin + rr, &sat) &&
-        sat.best - rr > margin) {
-        cache->reference = sat.a;
-        cache->face = (mk_feature)(sat.b + 1);
-        return 1;
-    }
-    cache->axis = cache->reference = 0;
-    cache->face = 0;
-    return 0;
-}
-
-/* Two polytopes (boxes, hulls): SAT (src/sat.h; the 15-axis closed form for
- * two boxes), then a face axis clips the incident face against the
+/* A hull and a hull or a box (two boxes: box_box.c): SAT (src/sat.h), then a face axis clips the incident face against the
  * reference face and an edge axis gives the closest points of the two
  * edges. Cold (no cache) the exact best axis is used; warm, faces are
  * preferred to edge pairs within the hysteresis band, and with
@@ -388,43 +311,37 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     mk_feat ref, inc;
     opt = mk_sat_defaults();
     opt.stop_above = m->margin + ra + rb;
-    if (cache && cache->axis > APART_HINT) {
+    if (cache && cache->axis > MK_MF_APART_HINT) {
         /* Apart last frame: that axis first, and nothing else is carried. */
-        opt.first = (mk_sat_kind)(cache->axis - APART_HINT);
+        opt.first = (mk_sat_kind)(cache->axis - MK_MF_APART_HINT);
         opt.first_a = cache->reference;
         opt.first_b = (int)cache->face - 1;
         cache->axis = cache->reference = 0;
         cache->face = 0;
     }
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
-    opt.prefer_rel = MK_SAT_PREFER_REL;
+    opt.prefer_rel = MK_MF_PREFER_REL;
     opt.hold_face = !cache || cache->mode == MK_MANIFOLD_STABLE_IDS;
     mk_box_hull va, vb;
     const mk_hull *ha = a->u.hull, *hb = b->u.hull;
-    int boxes = a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX;
     opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0
-                                               : MK_SAT_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
+                                               : MK_MF_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
                                                                             b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
-    if (boxes) {
-        mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p->r, p->t, &opt, &sat);
-        if (sat.kind == MK_SAT_EDGES) box_face_axis(p, &sat);
-    } else {
-        /* A box meets a hull as its mk_box_hull view: O(1), no allocation,
-         * the same indices as the 15-axis form. */
-        if (a->type == MK_SHAPE_BOX) {
-            mk_box_hull_init(&va, a->u.half_extents);
-            ha = &va.hull;
-        }
-        if (b->type == MK_SHAPE_BOX) {
-            mk_box_hull_init(&vb, b->u.half_extents);
-            hb = &vb.hull;
-        }
-        mk_sat(ha, hb, &p->r, p->t, &opt, &sat);
-        if (sat.kind == MK_SAT_EDGES) face_axis(ha, hb, p, &sat);
+    /* A box meets a hull as its mk_box_hull view: O(1), no allocation,
+     * the same indices as the 15-axis form. */
+    if (a->type == MK_SHAPE_BOX) {
+        mk_box_hull_init(&va, a->u.half_extents);
+        ha = &va.hull;
     }
+    if (b->type == MK_SHAPE_BOX) {
+        mk_box_hull_init(&vb, b->u.half_extents);
+        hb = &vb.hull;
+    }
+    mk_sat(ha, hb, &p->r, p->t, &opt, &sat);
+    if (sat.kind == MK_SAT_EDGES) face_axis(ha, hb, p, &sat);
     if (sat.best - ra - rb > m->margin) {
         if (cache) {
-            cache->axis = APART_HINT + (int)sat.kind;
+            cache->axis = MK_MF_APART_HINT + (int)sat.kind;
             cache->reference = sat.a;
             cache->face = (mk_feature)(sat.b + 1);
         }
@@ -433,9 +350,7 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     if (cache) cache->axis = (int)sat.kind;
     m->normal = sat.normal;
     m->cores_apart = sat.separation > 0;
-    if (boxes && sat.kind != MK_SAT_EDGES) {
-        mk_mf_clip_boxes(m, p, sat.kind == MK_SAT_FACE_A, sat.kind == MK_SAT_FACE_A ? sat.a : sat.b, ra, rb, 1);
-    } else if (sat.kind == MK_SAT_FACE_A) {
+    if (sat.kind == MK_SAT_FACE_A) {
         polytope_face(a, sat.a, &ref);
         mk_support_feature(b, mk_mat3_tmul_v3(p->r, mk_v3_neg(sat.normal)), &inc);
         mk_feat_transform(&inc, p);
@@ -534,15 +449,16 @@ static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair 
     }
 }
 
-/* mk_collide_pose after its checks: the pair routine, the reduction and
- * the move to world space. Out of line, so the checks and the boxes'
- * apart shortcut run without this frame (a whole mk_mf). */
+/* mk_collide_pose after its checks: the pair routine (the table's, or
+ * `fn` when given), the reduction and the move to world space. Out of
+ * line, so the checks and the two boxes' path run without this frame (a
+ * whole mk_mf). */
 static MK_NOINLINE mk_status collide_checked(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
-                                             mk_manifold_cache *cache, mk_manifold *out)
+                                             mk_manifold_cache *cache, mk_manifold *out, pair_fn fn)
 {
     mk_status st;
-    pair_fn fn = pair_table(a->type, b->type);
     int swap = 0;
+    if (!fn) fn = pair_table(a->type, b->type);
     mk_pair p;
     mk_mf m;
     if (!fn) {
@@ -592,14 +508,12 @@ mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *
     if (margin < 0) return MK_ERR_BAD_ARGUMENT;
     if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
 #ifndef MK_WITHOUT_SAT
-    if (cache && cache->axis > APART_HINT && a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX &&
-        boxes_stay_apart(a, xa, b, xb, margin, cache)) {
-        out->count = 0;
-        out->normal = mk_v3(0, 0, 1);
-        return MK_OK;
-    }
+    /* Two boxes in one pass (box_box.c); GJK when rounded cores are apart
+     * and SAT's points fall short of their distance. */
+    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX)
+        return mk_box_box_collide(a, xa, b, xb, margin, cache, out) ? MK_OK : collide_checked(a, xa, b, xb, margin, cache, out, generic);
 #endif
-    return collide_checked(a, xa, b, xb, margin, cache, out);
+    return collide_checked(a, xa, b, xb, margin, cache, out, NULL);
 }
 
 /* Checks and converts the transforms (after the shapes, in argument order),

@@ -76,14 +76,6 @@ void mk_feat_transform(mk_feat *f, const mk_pair *p);
  * MK_MF_SIN_TOL. ra, rb are the rounding radii. */
 void mk_mf_clip(mk_mf *m, const mk_feat *ref, int ref_is_a, const mk_feat *inc, mk_real ra, mk_real rb);
 
-/* mk_mf_clip of two box cores of pair p (both shapes boxes) with box face
- * `face` of A (ref_is_a) or of B as the reference, against the incident
- * face of the other box along m->normal (set, a SAT face axis): the same
- * candidates and IDs, computed in the reference box's frame. With `reduce`
- * (m empty on entry) more than four candidates are reduced as mk_mf_reduce
- * would, in the reference face's coordinates. */
-void mk_mf_clip_boxes(mk_mf *m, const mk_pair *p, int ref_is_a, int face, mk_real ra, mk_real rb, int reduce);
-
 /* The manifold of two cores whose closest points are known: n (unit, A to B)
  * and the core witness points ca on A and cb on B (A's frame), with core
  * distance dist along n (< 0 when the cores overlap). Builds a face clip, a
@@ -116,7 +108,70 @@ int mk_hull_edge_id(const mk_hull *h, int half_edge);
 /* Face 2 * axis + positive of a box core as a polygon. */
 void mk_box_face(const mk_shape *s, int axis, int positive, mk_feat *f);
 
+/* Per box face 2 * axis + positive: its corners counter-clockwise seen
+ * from outside, and the box edges from each corner to the next. */
+extern const unsigned char mk_box_face_corner_[6][4];
+extern const unsigned char mk_box_face_edge_[6][4];
+
 /* Box edge named by two corners that differ in exactly one coordinate. */
 mk_feature mk_box_edge(int corner_i, int corner_j);
+
+/* Corner `bits` (zyx, set = +extent) of the box of half-extents h, and
+ * the two ends of box edge `id` (minko/manifold.h numbering). */
+static inline mk_vec3 mk_box_corner(mk_vec3 h, int bits)
+{
+    return mk_v3(bits & 1 ? h.x : -h.x, bits & 2 ? h.y : -h.y, bits & 4 ? h.z : -h.z);
+}
+void mk_box_edge_ends(mk_vec3 h, int id, mk_vec3 *e0, mk_vec3 *e1);
+
+/* Face/edge hysteresis of box and hull pairs (mk_sat_options.prefer; the
+ * measurements are in manifold.c): the band is MK_MF_PREFER_REL of the
+ * depth plus MK_MF_PREFER_ABS of the smaller shape's smallest half extent
+ * (inner radius for a hull). */
+#define MK_MF_PREFER_REL MK_REAL(0.05)
+#define MK_MF_PREFER_ABS MK_REAL(0.005)
+
+/* mk_manifold_cache.axis above this: the pair was apart beyond the margin
+ * last frame along the SAT axis of kind axis - MK_MF_APART_HINT, whose
+ * indices a and b + 1 are kept in cache->reference and cache->face (which
+ * a polytope pair does not otherwise carry across frames). A pair that
+ * stays apart then costs one axis (mk_sat_options.first). */
+#define MK_MF_APART_HINT 4
+
+/* ---- two boxes (box_box.c) ---- */
+
+/* Most candidates of a box face clip (4 corners, at most one more per side
+ * pass; room to spare for round-off). */
+#define MK_BB_CLIP_MAX 16
+
+/* A candidate of a box-face clip: the incident core point q in the
+ * reference box's frame, its height over the reference face (core
+ * separation), its depth (radii included) and its features (A's low). */
+typedef struct mk_bb_point {
+    mk_vec3 q;
+    mk_real height, depth;
+    uint32_t features;
+} mk_bb_point;
+
+/* The face clip of two box cores of pair p (both shapes boxes) with box
+ * face `face` of A (ref_is_a) or of B as the reference and the incident
+ * face of the other box, done in the reference face's 2D coordinates: the
+ * candidates mk_mf_clip would give for mk_box_face against the
+ * mk_support_feature of the other box along the face's normal, with the
+ * same IDs, in the same order, clip slop `slop` (a fraction of the
+ * reference side), those deeper than -margin; with `reduce`, the four
+ * mk_mf_pick4 keeps in the face's coordinates. Returns the count. */
+int mk_box_box_clip(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_real margin, int reduce, mk_bb_point *out);
+
+/* mk_collide_pose of two boxes after its checks, in one pass: last
+ * frame's separating axis, the bounding balls, the relative pose, the 15
+ * SAT axes with the face/edge hysteresis, then for a face axis
+ * mk_box_box_clip reduced to four, for an edge pair the edges' closest
+ * points; the result written straight into *out, the cache updated.
+ * Returns 1 when done, 0 when rounded cores are apart and SAT's points do
+ * not realise their distance: the caller then asks GJK (*out is then
+ * undefined, the cache already updated as the general path expects). */
+int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+                       mk_manifold *out);
 
 #endif

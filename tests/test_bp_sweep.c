@@ -275,6 +275,37 @@ START_TEST(churn)
 }
 END_TEST
 
+/* Thin boxes over a tall row axis: tens of thousands of rows (the radix
+ * sort's third digit), then, with the plan kept, clusters of overlapping
+ * boxes moved far past every end of its ranges, where they share the
+ * first or the last row (0xFFFE, next to the sentinel that ends the last
+ * row's scans) and the ends of the quantised sweep axis. */
+START_TEST(far_rows)
+{
+    static scene s;
+    mk_rng r = {15};
+    int i, f;
+    scene_init(&s);
+    for (i = 0; i < 600; ++i) {
+        mk_vec3 c = mk_v3((mk_real)mk_rng_range(&r, 0, 2000), (mk_real)mk_rng_range(&r, 0, 1000), (mk_real)mk_rng_unit(&r));
+        add(&s, box_at(c, mk_v3((mk_real)mk_rng_range(&r, 0.5, 8), (mk_real)mk_rng_range(&r, 0.001, 0.01), (mk_real)0.5)), 0);
+    }
+    for (f = 0; f < 6; ++f) {
+        for (i = 0; i < s.n; ++i) {
+            mk_vec3 d = mk_v3_scale(mk_rng_dir(&r), (mk_real)0.004);
+            if (f >= 2 && i % 3 == 0) { /* far out: +-1e6 on both axes, in four clusters of overlapping boxes */
+                mk_real fx = (mk_real)(i % 2 ? 1e6 : -1e6), fy = (mk_real)(i % 4 < 2 ? 1e6 : -1e6);
+                d = mk_v3_sub(mk_v3(fx + (mk_real)(i % 7), fy + (mk_real)(0.001 * (i % 5)), 0), mk_aabb_center(s.box[i]));
+                d.z = 0;
+            }
+            move(&s, i, shifted(s.box[i], d));
+        }
+        check_frame(&s, random_box(&r, 1000, 1, 50));
+    }
+    scene_free(&s);
+}
+END_TEST
+
 /* Every box the same, then every box a point at the same place: all keys
  * tie, every pair overlaps (static ones aside). */
 START_TEST(all_equal)
@@ -396,6 +427,7 @@ int main(void)
     tcase_add_test(tc, touching);
     tcase_add_test(tc, churn);
     tcase_add_test(tc, all_equal);
+    tcase_add_test(tc, far_rows);
     tcase_add_test(tc, boxes_stride_and_order);
     tcase_add_test(tc, boxes_errors);
     suite_add_tcase(su, tc);

@@ -1,5 +1,6 @@
-/* test_clip.c: the box-face clip (mk_mf_clip_boxes) against the general
- * polygon clip (mk_mf_clip on mk_box_face polygons) it specialises: the same
+/* test_clip.c: the two boxes' face clip (mk_box_box_clip, box_box.c)
+ * against the general polygon clip (mk_mf_clip on mk_box_face polygons) it
+ * specialises: the same
  * candidates, in the same order, with the same feature IDs, positions and
  * depths, on random poses, stacked boxes (corners on the side planes, where
  * the slop decides) and rounded boxes apart, with the clip slop of either
@@ -52,9 +53,10 @@ static void general(const mk_pair *p, int ref_is_a, int face, mk_mf *m)
 static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int apart, mk_real slop, int reduce, int c)
 {
     mk_mf g, b;
+    mk_bb_point q[MK_BB_CLIP_MAX];
     mk_vec3 n;
-    mk_real scale = mk_v3_max_abs(p->t) + 2;
-    int i;
+    mk_real scale = mk_v3_max_abs(p->t) + 2, ra = p->a->radius, rb = p->b->radius;
+    int i, count;
     if (ref_is_a) {
         n = mk_v3_zero();
         if (face / 2 == 0) n.x = face & 1 ? 1 : -1;
@@ -67,7 +69,13 @@ static int compare(const mk_pair *p, int ref_is_a, int face, mk_real margin, int
     mf_init(&g, n, margin, apart, slop);
     mf_init(&b, n, margin, apart, slop);
     general(p, ref_is_a, face, &g);
-    mk_mf_clip_boxes(&b, p, ref_is_a, face, p->a->radius, p->b->radius, reduce);
+    /* The box clip's candidates in A's frame, as mk_box_box_collide places them. */
+    count = mk_box_box_clip(p, ref_is_a, face, apart && ra + rb > 0 ? 0 : slop, margin, reduce, q);
+    for (i = 0; i < count; ++i) {
+        mk_vec3 pa = ref_is_a ? mk_v3_mad(q[i].q, ra - q[i].height, n) : mk_v3_mad(mk_v3_add(mk_mat3_mul_v3(p->r, q[i].q), p->t), ra, n);
+        REQUIRE(mk_fabs_(q[i].depth - (ra + rb - q[i].height)) <= TOL * scale, "case %d point %d: depth and height disagree", c, i);
+        mk_mf_add(&b, pa, q[i].depth, MK_FEATURE_PAIR_A(q[i].features), MK_FEATURE_PAIR_B(q[i].features));
+    }
     if (reduce) mk_mf_reduce(&g);
     REQUIRE(g.count == b.count, "case %d: %d candidates, general clip %d", c, b.count, g.count);
     for (i = 0; i < g.count; ++i) {

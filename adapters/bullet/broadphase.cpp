@@ -21,13 +21,18 @@ namespace {
 // Bullet's btHashedOverlappingPairCache with the same deterministic dispatch
 // (pairs visited in descending (uid0, uid1) order, which is what Bullet's
 // quicksort with its ">" predicate gives, and Bullet's loop as it is,
-// removals included) without Bullet's quicksort of every pair every step:
-// the order of the last step is kept and reused while the pair array holds
-// the same pairs at the same places (a settled or sleeping scene: one O(n)
-// check), and otherwise rebuilt by a radix sort on keys packed to the uids'
-// width (O(n) per byte of key, three bytes up to 4096 proxies). Keys are
-// unique, so the order is exactly Bullet's. Memory: two arrays of the pair
-// count, grown by doubling, reused every step.
+// removals included) without Bullet's quicksort of every pair every step.
+// The pair array only changes through addOverlappingPair and
+// removeOverlappingPair (a removal moves the last pair into the hole), both
+// overridden here to flag it: while nothing changed the last order is reused
+// as it is (a settled or sleeping scene costs nothing). After a change the
+// entries whose index still holds their pair keep their order, the pairs at
+// the other indices (new or moved) are sorted by themselves and merged in:
+// O(n + k log k) for k changed places, and a radix sort on keys packed to the
+// uids' width when most places changed (the first step). Keys are unique, so
+// either way the order is exactly the sorted order of the current pairs,
+// Bullet's, whatever the history. Memory: six arrays of the pair count,
+// grown by doubling, reused every step.
 class PairCache : public btHashedOverlappingPairCache {
 public:
     using btHashedOverlappingPairCache::processAllOverlappingPairs;
@@ -39,67 +44,108 @@ public:
             return;
         }
         btBroadphasePairArray &pa = getOverlappingPairArray();
-        if (!order_still_valid(pa)) sort_by_uids(pa);
+        if (m_changed || (size_t)pa.size() != m_order.size()) update_order(pa);
         // m_order is ascending: walk it from the end.
         for (size_t i = m_order.size(); i > 0;) {
             btBroadphasePair *pair = &pa[m_order[i - 1].index];
-            if (callback->processOverlap(*pair)) {
+            if (callback->processOverlap(*pair))
                 removeOverlappingPair(pair->m_pProxy0, pair->m_pProxy1, dispatcher);
-                m_order_valid = false;
-            } else {
+            else
                 i--;
-            }
         }
+    }
+    btBroadphasePair *addOverlappingPair(btBroadphaseProxy *proxy0, btBroadphaseProxy *proxy1) override
+    {
+        m_changed = true;
+        return btHashedOverlappingPairCache::addOverlappingPair(proxy0, proxy1);
+    }
+    void *removeOverlappingPair(btBroadphaseProxy *proxy0, btBroadphaseProxy *proxy1, btDispatcher *dispatcher) override
+    {
+        m_changed = true;
+        return btHashedOverlappingPairCache::removeOverlappingPair(proxy0, proxy1, dispatcher);
     }
 
 private:
     struct Entry {
         unsigned u0, u1;  // uids (+ 1) of the pair at `index` when sorted
-        unsigned long long key;
         int index;
     };
+    static bool before(const Entry &a, const Entry &b) { return a.u0 != b.u0 ? a.u0 < b.u0 : a.u1 < b.u1; }
     // Bullet orders a missing proxy (uid -1) last: uid + 1.
     static unsigned uid_of(const btBroadphaseProxy *p) { return (unsigned)((p ? p->m_uniqueId : -1) + 1); }
-
-    bool order_still_valid(const btBroadphasePairArray &pa) const
+    static Entry entry_of(const btBroadphasePairArray &pa, int i)
     {
-        if (!m_order_valid || (size_t)pa.size() != m_order.size()) return false;
-        for (const Entry &e : m_order)
-            if (uid_of(pa[e.index].m_pProxy0) != e.u0 || uid_of(pa[e.index].m_pProxy1) != e.u1) return false;
-        return true;
+        return Entry{uid_of(pa[i].m_pProxy0), uid_of(pa[i].m_pProxy1), i};
     }
 
-    void sort_by_uids(const btBroadphasePairArray &pa)
+    void update_order(const btBroadphasePairArray &pa)
+    {
+        m_changed = false;
+        const int n = pa.size();
+        if (m_seen.size() < (size_t)n) m_seen.resize((size_t)n, 0);
+        if (++m_stamp == 0) {  // wrapped: no index may look seen
+            std::fill(m_seen.begin(), m_seen.end(), 0u);
+            m_stamp = 1;
+        }
+        m_keep.clear();
+        for (const Entry &e : m_order) {
+            if (e.index >= n) continue;
+            const Entry now = entry_of(pa, e.index);
+            if (now.u0 != e.u0 || now.u1 != e.u1) continue;
+            m_keep.push_back(e);
+            m_seen[(size_t)e.index] = m_stamp;
+        }
+        m_new.clear();
+        for (int i = 0; i < n; i++)
+            if (m_seen[(size_t)i] != m_stamp) m_new.push_back(entry_of(pa, i));
+        if (m_new.size() > (size_t)n / 4) {
+            radix_sort(pa);
+            return;
+        }
+        std::sort(m_new.begin(), m_new.end(), before);
+        m_order.resize((size_t)n);
+        std::merge(m_keep.begin(), m_keep.end(), m_new.begin(), m_new.end(), m_order.begin(), before);
+    }
+
+    void radix_sort(const btBroadphasePairArray &pa)
     {
         const size_t n = (size_t)pa.size();
         m_order.resize(n);
-        m_tmp.resize(n);
+        m_keep.resize(n);
+        m_keys.resize(n);
+        m_tmp_keys.resize(n);
         unsigned top = 0;
         for (size_t i = 0; i < n; i++) {
-            const btBroadphasePair &p = pa[(int)i];
-            m_order[i] = Entry{uid_of(p.m_pProxy0), uid_of(p.m_pProxy1), 0, (int)i};
+            m_order[i] = entry_of(pa, (int)i);
             top = std::max(top, std::max(m_order[i].u0, m_order[i].u1));
         }
         int bits = 1;
         while (bits < 32 && (top >> bits) != 0) bits++;
-        for (Entry &e : m_order) e.key = (unsigned long long)e.u0 << bits | e.u1;
+        for (size_t i = 0; i < n; i++) m_keys[i] = (unsigned long long)m_order[i].u0 << bits | m_order[i].u1;
         for (int shift = 0; shift < 2 * bits; shift += 8) {
             size_t count[256] = {};
-            for (const Entry &e : m_order) count[(e.key >> shift) & 255]++;
+            for (size_t i = 0; i < n; i++) count[(m_keys[i] >> shift) & 255]++;
             size_t at = 0;
             for (size_t &c : count) {
                 const size_t here = c;
                 c = at;
                 at += here;
             }
-            for (const Entry &e : m_order) m_tmp[count[(e.key >> shift) & 255]++] = e;
-            m_order.swap(m_tmp);
+            for (size_t i = 0; i < n; i++) {
+                const size_t to = count[(m_keys[i] >> shift) & 255]++;
+                m_keep[to] = m_order[i];
+                m_tmp_keys[to] = m_keys[i];
+            }
+            m_order.swap(m_keep);
+            m_keys.swap(m_tmp_keys);
         }
-        m_order_valid = true;
     }
 
-    std::vector<Entry> m_order, m_tmp;
-    bool m_order_valid = false;
+    std::vector<Entry> m_order, m_keep, m_new;
+    std::vector<unsigned long long> m_keys, m_tmp_keys;
+    std::vector<unsigned> m_seen;  // m_stamp at the indices whose entry was kept
+    unsigned m_stamp = 0;
+    bool m_changed = true;
 };
 
 mk_aabb to_aabb(const btVector3 &lo, const btVector3 &hi) { return mk_aabb_make(to_mk(lo), to_mk(hi)); }

@@ -2,12 +2,7 @@
 // btPersistentManifold (see contact_writer.h for the contract).
 #include "contact_writer.h"
 
-#include <new>
-#include <type_traits>
-
 namespace mkb {
-
-static_assert(std::is_trivially_destructible<btManifoldPoint>::value, "write_contacts never destroys its points");
 
 namespace {
 
@@ -49,43 +44,61 @@ struct Tangents {
     }
 };
 
-// The point btManifoldResult::addContactPoint would build, with the feature
-// keys in the part ids (body 0 / body 1 of the manifold), constructed in
-// place: a btManifoldPoint is some 300 bytes, and building four by default
-// and copying each in cost more than the rest of the writer.
-void make_point(void *at, const btTransform &t0, const btTransform &t1, bool swapped, int index0, int index1,
-                const Material &mat, Tangents *tangents, const PairContact &c)
+// Everything btManifoldResult::addContactPoint sets on a point, written into
+// `p` in place; the warm-start state (impulses, previous rhs, lifetime, user
+// data) is left as it is. On a default-constructed point this is the point
+// addContactPoint builds; on a cached point it is what replaceContactPoint
+// leaves (without friction anchors), without building a fresh point of some
+// 350 bytes and copying it over the cached one.
+void fill_point(btManifoldPoint &p, const Material &mat, Tangents *tangents, const PairContact &c,
+                const btVector3 &local_a, const btVector3 &local_b, int part0, int part1, int index0, int index1)
 {
-    const btVector3 point_a = c.point_on_b + c.normal_on_b * c.distance;
-    const btTransform &ta = swapped ? t1 : t0, &tb = swapped ? t0 : t1;
-    btManifoldPoint &p = *new (at) btManifoldPoint(ta.invXform(point_a), tb.invXform(c.point_on_b), c.normal_on_b, c.distance);
-    p.m_positionWorldOnA = point_a;
+    p.m_localPointA = local_a;
+    p.m_localPointB = local_b;
+    p.m_positionWorldOnA = c.point_on_b + c.normal_on_b * c.distance;
     p.m_positionWorldOnB = c.point_on_b;
+    p.m_normalWorldOnB = c.normal_on_b;
+    p.m_distance1 = c.distance;
     p.m_combinedFriction = mat.friction;
     p.m_combinedRestitution = mat.restitution;
     p.m_combinedRollingFriction = mat.rolling;
     p.m_combinedSpinningFriction = mat.spinning;
+    p.m_contactPointFlags = mat.flags;
+    p.m_contactMotion1 = p.m_contactMotion2 = 0;
     p.m_combinedContactDamping1 = mat.damping;
     p.m_combinedContactStiffness1 = mat.stiffness;
-    p.m_contactPointFlags |= mat.flags;
+    p.m_frictionCFM = 0;
     tangents->of(c.normal_on_b);
     p.m_lateralFrictionDir1 = tangents->t1;
     p.m_lateralFrictionDir2 = tangents->t2;
-    p.m_partId0 = swapped ? c.feature_b : c.feature_a;
-    p.m_partId1 = swapped ? c.feature_a : c.feature_b;
-    p.m_index0 = swapped ? index1 : index0;
-    p.m_index1 = swapped ? index0 : index1;
+    p.m_partId0 = part0;
+    p.m_partId1 = part1;
+    p.m_index0 = index0;
+    p.m_index1 = index1;
 }
 
-bool same_key(const btManifoldPoint &a, const btManifoldPoint &b)
+// A reported point before it is written: its local anchors on the manifold's
+// bodies 0 and 1 and its keys in the manifold's body order.
+struct Fresh {
+    const PairContact *c;
+    btVector3 local_a, local_b;
+    int part0, part1, index0, index1;
+    int slot;  // cached slot it replaces, or -1
+};
+
+bool same_key(const btManifoldPoint &a, const Fresh &f)
 {
-    return a.m_partId0 == b.m_partId0 && a.m_partId1 == b.m_partId1 && a.m_index0 == b.m_index0 &&
-           a.m_index1 == b.m_index1;
+    return a.m_partId0 == f.part0 && a.m_partId1 == f.part1 && a.m_index0 == f.index0 && a.m_index1 == f.index1;
+}
+
+void write_point(btManifoldPoint &p, const Material &mat, Tangents *tangents, const Fresh &f)
+{
+    fill_point(p, mat, tangents, *f.c, f.local_a, f.local_b, f.part0, f.part1, f.index0, f.index1);
 }
 
 }  // namespace
 
-void write_contacts(btManifoldResult *result, const PairContact *points, int count, bool by_features)
+bool write_contacts(btManifoldResult *result, const PairContact *points, int count, bool by_features)
 {
     btPersistentManifold *m = result->getPersistentManifold();
     const btCollisionObjectWrapper *w0 = result->getBody0Wrap(), *w1 = result->getBody1Wrap();
@@ -95,39 +108,37 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
         // leave matching to Bullet.
         for (int i = 0; i < count; i++)
             result->addContactPoint(points[i].normal_on_b, points[i].point_on_b, points[i].distance);
-        return;
+        return false;
     }
     const btCollisionObject *o0 = w0->getCollisionObject(), *o1 = w1->getCollisionObject();
     const bool swapped = m->getBody0() != o0;
-    const bool was_empty = m->getNumContacts() == 0;
+    const int cached = m->getNumContacts();
     const btScalar threshold = m->getContactBreakingThreshold();
-    const Material mat = material_of(o0, o1);
-    Tangents tangents;
+    const btTransform &ta = swapped ? o1->getWorldTransform() : o0->getWorldTransform();
+    const btTransform &tb = swapped ? o0->getWorldTransform() : o1->getWorldTransform();
 
-    // Raw storage: only the points written are constructed (trivially
-    // destructible, so nothing to destroy).
-    union Storage {
-        unsigned char bytes[MANIFOLD_CACHE_SIZE * sizeof(btManifoldPoint)];
-        btVector3 align;
-        Storage() {}
-    } storage;
-    btManifoldPoint *fresh = reinterpret_cast<btManifoldPoint *>(storage.bytes);
-    int slot_of[MANIFOLD_CACHE_SIZE];  // cached slot matched by fresh[i], or -1
+    Fresh fresh[MANIFOLD_CACHE_SIZE];
     bool slot_used[MANIFOLD_CACHE_SIZE] = {false, false, false, false};
     int n = 0;
     for (int i = 0; i < count; i++) {
-        if (points[i].distance > threshold) continue;
-        make_point(&fresh[n], o0->getWorldTransform(), o1->getWorldTransform(), swapped, w0->m_index, w1->m_index,
-                   mat, &tangents, points[i]);
-        slot_of[n] = -1;
-        for (int s = 0; s < m->getNumContacts(); s++) {
-            if (!slot_used[s] && same_key(m->getContactPoint(s), fresh[n])) {
-                slot_of[n] = s;
+        const PairContact &c = points[i];
+        if (c.distance > threshold) continue;
+        Fresh &f = fresh[n++];
+        f.c = &c;
+        f.local_a = ta.invXform(c.point_on_b + c.normal_on_b * c.distance);
+        f.local_b = tb.invXform(c.point_on_b);
+        f.part0 = swapped ? c.feature_b : c.feature_a;
+        f.part1 = swapped ? c.feature_a : c.feature_b;
+        f.index0 = swapped ? w1->m_index : w0->m_index;
+        f.index1 = swapped ? w0->m_index : w1->m_index;
+        f.slot = -1;
+        for (int s = 0; s < cached; s++) {
+            if (!slot_used[s] && same_key(m->getContactPoint(s), f)) {
+                f.slot = s;
                 slot_used[s] = true;
                 break;
             }
         }
-        n++;
     }
     // A contact whose features changed but which did not move (a corner that
     // slid past its neighbour's edge turns from vertex-face into edge-edge)
@@ -136,22 +147,35 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
     // threshold, on the point on B, as getCacheEntry does). This also keeps a
     // point kept below from being doubled by its successor.
     for (int i = 0; i < n; i++) {
-        if (slot_of[i] >= 0) continue;
+        if (fresh[i].slot >= 0) continue;
         btScalar best = threshold * threshold;
-        for (int s = 0; s < m->getNumContacts(); s++) {
+        for (int s = 0; s < cached; s++) {
             if (slot_used[s]) continue;
-            const btScalar d2 = (m->getContactPoint(s).m_localPointB - fresh[i].m_localPointB).length2();
+            const btScalar d2 = (m->getContactPoint(s).m_localPointB - fresh[i].local_b).length2();
             if (d2 < best) {
                 best = d2;
-                slot_of[i] = s;
+                fresh[i].slot = s;
             }
         }
-        if (slot_of[i] >= 0) slot_used[slot_of[i]] = true;
+        if (fresh[i].slot >= 0) slot_used[fresh[i].slot] = true;
     }
 
-    // Matched: replaced in place, impulses and lifetime carried over.
-    for (int i = 0; i < n; i++)
-        if (slot_of[i] >= 0) m->replaceContactPoint(fresh[i], slot_of[i]);
+    const Material mat = material_of(o0, o1);
+    Tangents tangents;
+    // Matched: rewritten in place, impulses and lifetime carried over (with
+    // friction anchors, Bullet's replaceContactPoint decides whether the
+    // cached point stays).
+    for (int i = 0; i < n; i++) {
+        if (fresh[i].slot < 0) continue;
+        btManifoldPoint &p = m->getContactPoint(fresh[i].slot);
+        if (mat.flags & BT_CONTACT_FLAG_FRICTION_ANCHOR) {
+            btManifoldPoint q;
+            write_point(q, mat, &tangents, fresh[i]);
+            m->replaceContactPoint(q, fresh[i].slot);
+        } else {
+            write_point(p, mat, &tangents, fresh[i]);
+        }
+    }
     // New points: appended while there is room, then into the slots of cached
     // points not reported this frame (fresh warm-start state, user data
     // released). Unreported points that keep their slot stay, as in Bullet's
@@ -162,28 +186,51 @@ void write_contacts(btManifoldResult *result, const PairContact *points, int cou
     // frame restarted its impulse and kept the hull rocking.
     int free_slot = 0;
     for (int i = 0; i < n; i++) {
-        if (slot_of[i] >= 0) continue;
+        if (fresh[i].slot >= 0) continue;
+        btManifoldPoint p;
+        write_point(p, mat, &tangents, fresh[i]);
         if (m->getNumContacts() < MANIFOLD_CACHE_SIZE) {
-            slot_of[i] = m->addManifoldPoint(fresh[i]);
-            slot_used[slot_of[i]] = true;
+            fresh[i].slot = m->addManifoldPoint(p);
+            slot_used[fresh[i].slot] = true;
             continue;
         }
         while (slot_used[free_slot]) free_slot++;  // n <= 4 fresh points: a free slot exists
         m->clearUserCache(m->getContactPoint(free_slot));
-        m->getContactPoint(free_slot) = fresh[i];
+        m->getContactPoint(free_slot) = p;
         slot_used[free_slot] = true;
-        slot_of[i] = free_slot;
+        fresh[i].slot = free_slot;
     }
 
     if (gContactAddedCallback && ((o0->getCollisionFlags() | o1->getCollisionFlags()) &
                                   btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK)) {
         const btCollisionObjectWrapper *a = swapped ? w1 : w0, *b = swapped ? w0 : w1;
         for (int i = 0; i < n; i++) {
-            btManifoldPoint &p = m->getContactPoint(slot_of[i]);
+            btManifoldPoint &p = m->getContactPoint(fresh[i].slot);
             (*gContactAddedCallback)(p, a, p.m_partId0, p.m_index0, b, p.m_partId1, p.m_index1);
         }
     }
-    if (gContactStartedCallback && was_empty && n > 0) gContactStartedCallback(m);
+    if (gContactStartedCallback && cached == 0 && n > 0) gContactStartedCallback(m);
+    // Every point of the manifold written now, none kept from before?
+    return n == m->getNumContacts() && n > 0;
+}
+
+void refresh_contacts(btManifoldResult *result, bool all_fresh)
+{
+    btPersistentManifold *m = result->getPersistentManifold();
+    if (!all_fresh) {
+        result->refreshContactPoints();
+        return;
+    }
+    // What refreshContactPoints does to points written this frame: their
+    // world positions and distances are recomputed from the local anchors
+    // (the same values up to round-off; kept exact here), none is beyond
+    // the breaking threshold (written ones are within it) or slid sideways
+    // (zero), so each only ages by one frame and is reported processed, in
+    // Bullet's order.
+    for (int i = m->getNumContacts() - 1; i >= 0; i--) m->getContactPoint(i).m_lifeTime++;
+    if (gContactProcessedCallback)
+        for (int i = m->getNumContacts() - 1; i >= 0; i--)
+            (*gContactProcessedCallback)(m->getContactPoint(i), (void *)m->getBody0(), (void *)m->getBody1());
 }
 
 }  // namespace mkb

@@ -59,8 +59,9 @@ inline mk_quat to_mk(const btQuaternion &q) { return mk_quat_make(q.x(), q.y(), 
 mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out);
 
 // Brings a mapping made earlier up to date with its shape (a primitive is
-// mapped again, a hull keeps its Minko hull and takes the current margin).
-mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map);
+// mapped again, a hull keeps its Minko hull and takes the current margin);
+// *changed (when given) tells whether the mapping changed.
+mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map, bool *changed = nullptr);
 
 // World pose of the mapped shape for a Bullet world transform.
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map);

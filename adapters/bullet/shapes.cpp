@@ -71,8 +71,9 @@ mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out)
     return st;
 }
 
-mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map)
+mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map, bool *changed)
 {
+    if (changed) *changed = false;
     // Every step for every pair: compare the few numbers that define the
     // solid and map again (with validation) only when one changed.
     const mk_shape &m = map->shape;
@@ -92,11 +93,14 @@ mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map)
         if (margin == m.radius) return MK_OK;
         if (!(margin >= 0)) return MK_ERR_BAD_SIZE;
         map->shape.radius = margin;
+        if (changed) *changed = true;
         return MK_OK;
     }
     default: break;
     }
-    return map_primitive(shape, map);
+    const mk_status st = map_primitive(shape, map);
+    if (changed) *changed = st == MK_OK;
+    return st;
 }
 
 mk_status minko_pose(const btTransform &world, const ShapeMap &map, mk_pose *out)

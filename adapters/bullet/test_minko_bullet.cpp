@@ -186,11 +186,19 @@ struct WriterRig {
         b.setSpinningFriction(btScalar(0.02));
         manifold = btPersistentManifold(swapped ? &b : &a, swapped ? &a : &b, 0, btScalar(0.02), BT_LARGE_FLOAT);
     }
-    void write(const mkb::PairContact *c, int n)
+    // write_contacts: whether every point of the manifold was written now.
+    bool write(const mkb::PairContact *c, int n)
     {
         btManifoldResult r(wa, wb);
         r.setPersistentManifold(&manifold);
-        mkb::write_contacts(&r, c, n);
+        return mkb::write_contacts(&r, c, n);
+    }
+    // The adapter's refresh after a write that returned `all_fresh`.
+    void refresh_contacts(bool all_fresh)
+    {
+        btManifoldResult r(wa, wb);
+        r.setPersistentManifold(&manifold);
+        mkb::refresh_contacts(&r, all_fresh);
     }
     // A moved by `up` along the contacts' normal (+y) from pose `rest`.
     void move_a(const btTransform &rest, btScalar up)
@@ -378,6 +386,63 @@ START_TEST(writer_gone_new_and_callbacks)
     ck_assert_int_eq(g_started, 2);
     gContactStartedCallback = old_started;
     gContactEndedCallback = old_ended;
+}
+END_TEST
+
+int g_processed = 0;
+bool on_processed(btManifoldPoint &, void *, void *)
+{
+    g_processed++;
+    return true;
+}
+
+// A manifold written whole (every point reported now) is refreshed by aging
+// alone, to the same points Bullet's refreshContactPoints leaves (lifetimes,
+// positions, distances, processed callbacks), in both manifold orders; one
+// that keeps an unreported point says so and gets Bullet's refresh, which
+// drops that point once it separates.
+START_TEST(writer_refresh_of_fresh_points)
+{
+    ContactProcessedCallback old_processed = gContactProcessedCallback;
+    gContactProcessedCallback = on_processed;
+    for (int swapped = 0; swapped < 2; swapped++) {
+        WriterRig mine(swapped != 0), ref(swapped != 0);
+        mkb::PairContact c[4] = {contact(-1, -1, btScalar(-0.01), 1, 1), contact(1, -1, btScalar(-0.02), 2, 2),
+                                 contact(1, 1, btScalar(0.01), 3, 3), contact(-1, 1, btScalar(-0.005), 4, 4)};
+        for (int frame = 0; frame < 3; frame++) {
+            for (mkb::PairContact &k : c) k.distance -= btScalar(0.001);
+            ck_assert(mine.write(c, 4));
+            ck_assert(ref.write(c, 4));
+            g_processed = 0;
+            mine.refresh_contacts(true);
+            ck_assert_int_eq(g_processed, 4);
+            ref.refresh();
+            ck_assert_int_eq(mine.manifold.getNumContacts(), 4);
+            ck_assert_int_eq(ref.manifold.getNumContacts(), 4);
+            for (int i = 0; i < 4; i++) {
+                const btManifoldPoint &p = mine.manifold.getContactPoint(i), &q = ref.manifold.getContactPoint(i);
+                check_point_equal(p, q);
+                ck_assert_int_eq(p.getLifeTime(), frame + 1);
+                ck_assert_int_eq(q.getLifeTime(), frame + 1);
+            }
+        }
+        // 4 not reported: kept by the write, which says so; A then moves by
+        // 0.03, and the refresh is Bullet's: the same points as on the
+        // reference (unswapped: 3 and 4 are beyond the breaking threshold).
+        c[3].distance = btScalar(0.5);
+        const btTransform rest = mine.ta;
+        ck_assert(!mine.write(c, 3));
+        ck_assert(!ref.write(c, 3));
+        mine.move_a(rest, btScalar(0.03));
+        ref.move_a(rest, btScalar(0.03));
+        mine.refresh_contacts(false);
+        ref.refresh();
+        ck_assert_int_eq(mine.manifold.getNumContacts(), swapped ? 4 : 2);
+        ck_assert_int_eq(ref.manifold.getNumContacts(), mine.manifold.getNumContacts());
+        for (int i = 0; i < mine.manifold.getNumContacts(); i++)
+            check_point_equal(mine.manifold.getContactPoint(i), ref.manifold.getContactPoint(i));
+    }
+    gContactProcessedCallback = old_processed;
 }
 END_TEST
 
@@ -650,6 +715,31 @@ START_TEST(bp_deterministic_dispatch_order)
             proxies.pop_back();
         }
         while (proxies.size() < 300) add();
+    }
+    // A few proxies move per step (a few pairs come and go, others move in
+    // the pair array): the kept order merged with the changed places must
+    // still be exactly Bullet's.
+    for (int round = 0; round < 30; round++) {
+        for (int k = 0; k < 2; k++) {
+            btBroadphaseProxy *p = proxies[(size_t)mk_rng_range(&rng, 0, 299.99)];
+            const btVector3 c((btScalar)mk_rng_range(&rng, -4, 4), (btScalar)mk_rng_range(&rng, -4, 4),
+                              (btScalar)mk_rng_range(&rng, -4, 4));
+            const btVector3 h((btScalar)0.5, (btScalar)0.5, (btScalar)0.5);
+            bp.setAabb(p, c - h, c + h, &dispatcher);
+        }
+        bp.calculateOverlappingPairs(&dispatcher);
+        btOverlappingPairCache *cache = bp.getOverlappingPairCache();
+        btHashedOverlappingPairCache bullets;
+        for (int i = 0; i < cache->getNumOverlappingPairs(); i++)
+            bullets.addOverlappingPair(cache->getOverlappingPairArray()[i].m_pProxy0,
+                                       cache->getOverlappingPairArray()[i].m_pProxy1);
+        btDispatcherInfo info;
+        info.m_deterministicOverlappingPairs = true;
+        Recorder ordered, reference;
+        cache->processAllOverlappingPairs(&ordered, &dispatcher, info);
+        bullets.processAllOverlappingPairs(&reference, &dispatcher, info);
+        ck_assert_int_eq((int)ordered.seen.size(), cache->getNumOverlappingPairs());
+        ck_assert(ordered.seen == reference.seen);
     }
     for (btBroadphaseProxy *p : proxies) bp.destroyProxy(p, &dispatcher);
     ck_assert_int_eq(bp.take_error(), MK_OK);
@@ -1669,6 +1759,7 @@ Suite *suite()
     tcase_add_test(w, writer_matches_add_contact_point);
     tcase_add_test(w, writer_impulses_follow_features);
     tcase_add_test(w, writer_gone_new_and_callbacks);
+    tcase_add_test(w, writer_refresh_of_fresh_points);
     tcase_add_test(w, writer_moved_feature_keeps_impulse);
     tcase_add_test(w, writer_mesh_parts_left_to_bullet);
     suite_add_tcase(s, w);

@@ -49,7 +49,10 @@
  * coordinates cost no precision. Adapter state is
  * global and not thread-safe, like ODE's collider table. As with ODE's own
  * spaces, the near callback must not add, remove or destroy geoms of the
- * space being collided.
+ * space being collided; it may collide other spaces (nested spaces), but a
+ * call on the space being collided is refused (counted in errors, no pair
+ * reported), since mk_ode_space_collide calls back straight from its pair
+ * loop, as ODE's spaces do.
  *
  * Complexity: mk_ode_space_collide is O(n) to read the n geoms' AABBs plus
  * Minko's set-only sweep of them (mk_bp_sweep_boxes: one sort of n keys, O(n)
@@ -74,7 +77,8 @@ extern "C" {
 void mk_ode_space_collide(dSpaceID space, void *data, dNearCallback *callback);
 void mk_ode_space_collide2(dGeomID o1, dGeomID o2, void *data, dNearCallback *callback);
 /* Frees the persistent state kept for `space` (call it before dSpaceDestroy
- * to return the memory at once; mk_ode_close frees everything). */
+ * to return the memory at once; mk_ode_close frees everything). Refused
+ * (counted in errors) from inside that space's own near callback. */
 void mk_ode_space_forget(dSpaceID space);
 
 /* ---- narrowphase ---- */

@@ -4,10 +4,11 @@
  * *call*: it reads the space's geoms through the public API, keeps one
  * record per geom (keyed by dGeomID) and one Minko broadphase per space, and
  * reproduces the filter of ODE's collideAABBs (collision_space_internal.h)
- * on each pair the broadphase finds. The broadphase only proposes pairs (its
- * AABBs are the dReal ones rounded outwards to mk_real); the final overlap
- * test runs on ODE's own dReal AABBs, so the reported set is ODE's exactly
- * in a float build too.
+ * on each pair the broadphase finds. With mk_real = dReal the sweep's boxes
+ * are ODE's AABBs, copied once, and its closed test is ODE's; otherwise (a
+ * float build, or a box the sweep refuses) its boxes are ODE's rounded
+ * outwards, it only proposes pairs, and the final overlap test runs on
+ * ODE's own dReal AABBs: the reported set is ODE's exactly either way.
  *
  * Why the per-geom work is so small:
  *  - every call reads every geom's AABB anyway (ODE has no move notice), so
@@ -33,38 +34,44 @@
 #include "ode_internal.h"
 #include "ode_map.h"
 
-/* The fields a candidate pair reads come first: the pair loop touches two
- * entries and nothing else. */
+/* What a candidate pair reads, and no more (48 bytes): the pair loop
+ * touches two entries and, only when the boxes are not exact, two raw AABBs. */
 typedef struct entry {
     dGeomID geom;     /* NULL: free slot */
     uint32_t checked; /* sync epoch of the filter fields below */
     int ok;           /* enabled and not zero-sized */
     dBodyID body;
     unsigned long cat, col;
-    dReal aabb[6];    /* ODE's interleaved AABB {minx, maxx, miny, maxy, minz, maxz} */
     uint32_t seen;    /* sync epoch that last found the geom in the space */
 } entry;
+
+/* ODE's interleaved AABB {minx, maxx, miny, maxy, minz, maxz}. */
+typedef dReal ode_aabb[6];
 
 typedef struct space_state {
     dSpaceID space;
     mk_bp *bp;        /* set-only sweeps of boxes[0, n) */
     int capacity;     /* box capacity of bp */
     entry *entries;   /* records [0, n), dense: a removed one's place takes the last */
-    mk_aabb *boxes;   /* boxes[i]: entries[i].aabb rounded outwards to mk_real */
+    mk_aabb *boxes;   /* boxes[i]: record i's ODE AABB, rounded outwards to mk_real */
+    ode_aabb *raw;    /* raw[i]: record i's ODE AABB, kept only when !exact */
+    int exact;        /* boxes[] hold ODE's AABBs exactly (mk_real = dReal, none refused) */
     int n;
     size_t cap;       /* of entries and boxes */
     mk_ode_map index; /* dGeomID -> record */
     int *order;       /* record of the i-th geom of the previous enumeration */
     size_t norder, caporder;
     uint32_t epoch;
+    int busy;         /* its pairs are being reported: the records must stay as they are */
 } space_state;
 
 static mk_ode_map state_index; /* dSpaceID -> index into states */
 static space_state **states;
 static int nstates, capstates;
 
-/* Pairs waiting for the near callback. Callers append, report their range and
- * truncate back, so a callback may re-enter (nested spaces) safely. */
+/* Pairs waiting for the near callback (collide2's). Callers append, report
+ * their range and truncate back, so a callback may re-enter (nested spaces)
+ * safely. */
 typedef struct geom_pair { dGeomID a, b; } geom_pair;
 static geom_pair *report;
 static size_t nreport, capreport;
@@ -133,13 +140,12 @@ static int aabbs_overlap(const dReal *a1, const dReal *a2)
     return !(a1[0] > a2[1] || a1[1] < a2[0] || a1[2] > a2[3] || a1[3] < a2[2] || a1[4] > a2[5] || a1[5] < a2[4]);
 }
 
-/* collideAABBs' tests in its order, on exact dReal AABBs. */
-static int ode_filter(dBodyID b1, unsigned long cat1, unsigned long col1, const dReal *a1, dBodyID b2,
-                      unsigned long cat2, unsigned long col2, const dReal *a2)
+/* collideAABBs' tests in its order but for the AABBs' (the caller's). */
+static int ode_filter(dBodyID b1, unsigned long cat1, unsigned long col1, dBodyID b2, unsigned long cat2,
+                      unsigned long col2)
 {
     if (b1 && b1 == b2) return 0;
-    if (!((cat1 & col2) || (cat2 & col1))) return 0;
-    return aabbs_overlap(a1, a2);
+    return (cat1 & col2) || (cat2 & col1);
 }
 
 /* ---- dReal AABB -> mk_aabb, rounded outwards ---- */
@@ -192,21 +198,34 @@ static mk_aabb to_mk_aabb_rounded(const dReal *b)
     return box;
 }
 
-/* The box every call gives the sweep; inline, since every geom's box comes
- * through here every call. With mk_real = dReal a plain copy: the sweep
- * checks every box anyway, and a box it refuses (a NaN bound, a side at
- * +inf on both ends; planes are fine) sends the call to the rounded
- * conversion (sweep_records), so valid boxes are not checked twice. */
-static inline mk_aabb to_mk_aabb(const dReal *b)
+/* Reads geom g's AABB, once, into record i: with mk_real = dReal a plain
+ * copy into the box the sweep reads, which is then the only copy (exact:
+ * the sweep's closed test is ODE's, and a box it refuses -- a NaN bound, a
+ * side at +inf on both ends; planes are fine -- sends the call to the
+ * rounded conversion in sweep_records, so valid boxes are checked once);
+ * otherwise the raw AABB is kept for the exact test and rounded outwards. */
+static inline void read_aabb(space_state *st, int i, dGeomID g)
 {
 #if defined(MK_SINGLE)
-    return to_mk_aabb_rounded(b);
+    dGeomGetAABB(g, st->raw[i]);
+    st->boxes[i] = to_mk_aabb_rounded(st->raw[i]);
 #else
-    mk_aabb box;
-    box.lo = mk_v3(b[0], b[2], b[4]);
-    box.hi = mk_v3(b[1], b[3], b[5]);
-    return box;
+    ode_aabb b;
+    dGeomGetAABB(g, b);
+    st->boxes[i].lo = mk_v3(b[0], b[2], b[4]);
+    st->boxes[i].hi = mk_v3(b[1], b[3], b[5]);
 #endif
+}
+
+/* Record i's ODE AABB (collide2's scans). */
+static const dReal *record_aabb(const space_state *st, int i, ode_aabb tmp)
+{
+    const mk_aabb *b = &st->boxes[i];
+    if (!st->exact) return st->raw[i];
+    tmp[0] = b->lo.x; tmp[1] = b->hi.x;
+    tmp[2] = b->lo.y; tmp[3] = b->hi.y;
+    tmp[4] = b->lo.z; tmp[5] = b->hi.z;
+    return tmp;
 }
 
 /* ---- per-space state ---- */
@@ -234,11 +253,20 @@ static mk_status reserve(space_state *st, int n)
     return MK_OK;
 }
 
-static space_state *state_for(dSpaceID space)
+/* The state of `space`; NULL when out of memory (*err MK_ERR_OUT_OF_MEMORY)
+ * or while that space's own pairs are being reported, i.e. from inside its
+ * own near callback (*err MK_ERR_BAD_ARGUMENT: its records and pairs are in
+ * use, and ODE's own SAP space cannot do this either). */
+static space_state *state_for(dSpaceID space, mk_status *err)
 {
     long i = mk_ode_map_get(&state_index, space, NULL);
     space_state *st;
-    if (i >= 0) return states[i];
+    *err = MK_ERR_OUT_OF_MEMORY;
+    if (i >= 0) {
+        if (!states[i]->busy) return states[i];
+        *err = MK_ERR_BAD_ARGUMENT;
+        return NULL;
+    }
     if (nstates == capstates) {
         size_t cap = (size_t)capstates;
         if (grow_array((void **)&states, &cap, (size_t)nstates + 1, sizeof *states) != 0) return NULL;
@@ -260,12 +288,14 @@ static void free_state(space_state *st)
     if (st->bp) mk_bp_destroy(st->bp);
     free(st->entries);
     free(st->boxes);
+    free(st->raw);
     free(st->order);
     mk_ode_map_free(&st->index);
     free(st);
 }
 
-/* Room for n records in entries and boxes (grown together). */
+/* Room for n records in entries, boxes and raw (grown together; raw is
+ * address space only while the boxes are exact). */
 static int reserve_records(space_state *st, size_t n)
 {
     size_t cap = st->cap;
@@ -273,6 +303,8 @@ static int reserve_records(space_state *st, size_t n)
     if (grow_array((void **)&st->entries, &cap, n, sizeof *st->entries) != 0) return -1;
     cap = st->cap;
     if (grow_array((void **)&st->boxes, &cap, n, sizeof *st->boxes) != 0) return -1;
+    cap = st->cap;
+    if (grow_array((void **)&st->raw, &cap, n, sizeof *st->raw) != 0) return -1;
     st->cap = cap;
     return 0;
 }
@@ -296,6 +328,7 @@ static void remove_entry(space_state *st, int i)
     if (i == last) return;
     st->entries[i] = st->entries[last];
     st->boxes[i] = st->boxes[last];
+    memcpy(st->raw[i], st->raw[last], sizeof st->raw[i]);
     mk_ode_map_put(&st->index, st->entries[i].geom, NULL, (uint32_t)i); /* overwrite: cannot allocate */
 }
 
@@ -322,12 +355,14 @@ static mk_status sync(space_state *st)
         entry *e;
         if (slot < 0 && (s = add_entry(st, g, &slot)) != MK_OK) return s;
         e = &st->entries[slot];
-        dGeomGetAABB(g, e->aabb);
-        st->boxes[slot] = to_mk_aabb(e->aabb);
+        read_aabb(st, (int)slot, g);
         e->seen = st->epoch;
         st->order[i] = (int)slot;
     }
     st->norder = (size_t)n;
+#if !defined(MK_SINGLE)
+    st->exact = 1; /* every box was just copied from ODE */
+#endif
     /* Every enumerated geom is seen, so more records than geoms means some were not. */
     for (i = 0; st->n > n && i < st->n;)
         if (st->entries[i].seen != st->epoch) remove_entry(st, i);
@@ -335,15 +370,20 @@ static mk_status sync(space_state *st)
     return MK_OK;
 }
 
-/* The pairs of records whose boxes overlap: a candidate set for ODE's own
- * test, since boxes that ODE never separates (NaN) or the broadphase
- * refuses are widened to all space by the rounded conversion. */
+/* The pairs of records whose boxes overlap: ODE's AABB pairs exactly when
+ * st->exact, else a candidate set for ODE's own test on raw[], since boxes
+ * that ODE never separates (NaN) or the broadphase refuses are widened to
+ * all space by the rounded conversion. */
 static mk_status sweep_records(space_state *st, const mk_bp_pair **pairs, int *np)
 {
     int i;
     mk_status s = mk_bp_sweep_boxes(st->bp, st->boxes, 0, st->n, pairs, np);
     if (s != MK_ERR_BAD_AABB) return s;
-    for (i = 0; i < st->n; i++) st->boxes[i] = to_mk_aabb_rounded(st->entries[i].aabb);
+    st->exact = 0;
+    for (i = 0; i < st->n; i++) { /* ODE keeps the AABB it computed: a copy */
+        dGeomGetAABB(st->entries[i].geom, st->raw[i]);
+        st->boxes[i] = to_mk_aabb_rounded(st->raw[i]);
+    }
     return mk_bp_sweep_boxes(st->bp, st->boxes, 0, st->n, pairs, np);
 }
 
@@ -376,16 +416,16 @@ void mk_ode_space_collide(dSpaceID space, void *data, dNearCallback *callback)
     space_state *st;
     const mk_bp_pair *pairs;
     int np, i;
-    size_t from = nreport;
+    long long reported = 0;
     mk_status s;
     if (!space || !callback || !dGeomIsSpace((dGeomID)space)) {
         note_error(MK_ERR_NULL);
         return;
     }
     mk_ode_stats_.space_calls++;
-    st = state_for(space);
+    st = state_for(space, &s);
     if (!st) {
-        note_error(MK_ERR_OUT_OF_MEMORY);
+        note_error(s);
         return;
     }
     s = sync(st);
@@ -394,23 +434,24 @@ void mk_ode_space_collide(dSpaceID space, void *data, dNearCallback *callback)
         note_error(s);
         return;
     }
-    /* Room for every candidate up front: the loop below only stores. */
-    if (grow_array((void **)&report, &capreport, nreport + (size_t)np, sizeof *report) != 0) {
-        note_error(MK_ERR_OUT_OF_MEMORY);
-        return;
-    }
+    /* The callback straight from the pair loop, as ODE's spaces do (no
+     * list of pairs written and read again: at 3 million pairs that is
+     * 100 MB of memory traffic). It may collide other spaces; this one's
+     * records and pairs stay as they are while busy (state_for). */
+    st->busy = 1;
     for (i = 0; i < np; i++) {
         entry *a = &st->entries[pairs[i].a];
         entry *b = &st->entries[pairs[i].b];
         check_entry(st, a);
         check_entry(st, b);
-        if (a->ok && b->ok && ode_filter(a->body, a->cat, a->col, a->aabb, b->body, b->cat, b->col, b->aabb)) {
-            report[nreport].a = a->geom;
-            report[nreport].b = b->geom;
-            nreport++;
+        if (a->ok && b->ok && ode_filter(a->body, a->cat, a->col, b->body, b->cat, b->col) &&
+            (st->exact || aabbs_overlap(st->raw[pairs[i].a], st->raw[pairs[i].b]))) {
+            reported++;
+            callback(data, a->geom, b->geom);
         }
     }
-    flush(from, data, callback);
+    st->busy = 0;
+    mk_ode_stats_.pairs_reported += reported;
 }
 
 /* ODE's collide2(space, geom): every enabled geom of the (synced) space
@@ -427,9 +468,10 @@ static mk_status collect_vs_geom(space_state *st, dGeomID g, int g_first)
     dGeomGetAABB(g, box);
     for (i = 0; i < st->n; i++) {
         entry *e = &st->entries[i];
-        if (!aabbs_overlap(e->aabb, box)) continue; /* the filter fields are read for candidates only */
+        ode_aabb tmp;
+        if (!aabbs_overlap(record_aabb(st, i, tmp), box)) continue; /* the filter fields are read for candidates only */
         check_entry(st, e);
-        if (!e->ok || !ode_filter(e->body, e->cat, e->col, e->aabb, body, cat, col, box)) continue;
+        if (!e->ok || !ode_filter(e->body, e->cat, e->col, body, cat, col)) continue;
         if ((g_first ? push_pair(g, e->geom) : push_pair(e->geom, g)) != 0) return MK_ERR_OUT_OF_MEMORY;
     }
     return MK_OK;
@@ -460,8 +502,9 @@ void mk_ode_space_collide2(dGeomID o1, dGeomID o2, void *data, dNearCallback *ca
         dReal b1[6], b2[6];
         dGeomGetAABB(o1, b1);
         dGeomGetAABB(o2, b2);
-        if (ode_filter(dGeomGetBody(o1), dGeomGetCategoryBits(o1), dGeomGetCollideBits(o1), b1, dGeomGetBody(o2),
-                       dGeomGetCategoryBits(o2), dGeomGetCollideBits(o2), b2)) {
+        if (ode_filter(dGeomGetBody(o1), dGeomGetCategoryBits(o1), dGeomGetCollideBits(o1), dGeomGetBody(o2),
+                       dGeomGetCategoryBits(o2), dGeomGetCollideBits(o2)) &&
+            aabbs_overlap(b1, b2)) {
             mk_ode_stats_.pairs_reported++;
             callback(data, o1, o2);
         }
@@ -476,9 +519,8 @@ void mk_ode_space_collide2(dGeomID o1, dGeomID o2, void *data, dNearCallback *ca
         dGeomID other = queried == s1 ? o2 : o1;
         dSpaceID other_space = queried == s1 ? s2 : s1;
         int other_first = queried == s2; /* the o1 side always comes first */
-        space_state *st = state_for(queried);
-        if (!st) s = MK_ERR_OUT_OF_MEMORY;
-        if (s == MK_OK) s = sync(st);
+        space_state *st = state_for(queried, &s);
+        if (st) s = sync(st);
         if (s == MK_OK && other_space) {
             int n = dSpaceGetNumGeoms(other_space), i;
             for (i = 0; i < n && s == MK_OK; i++) s = collect_vs_geom(st, dSpaceGetGeom(other_space, i), other_first);
@@ -494,6 +536,10 @@ void mk_ode_space_forget(dSpaceID space)
 {
     long i = mk_ode_map_get(&state_index, space, NULL);
     if (i < 0) return;
+    if (states[i]->busy) { /* from inside its own near callback: its records are in use */
+        note_error(MK_ERR_BAD_ARGUMENT);
+        return;
+    }
     free_state(states[i]);
     mk_ode_map_remove(&state_index, space, NULL);
     if (i != nstates - 1) { /* swap-remove, keep the index map in step */

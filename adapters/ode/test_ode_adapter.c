@@ -542,6 +542,50 @@ START_TEST(test_space_bad_input)
 }
 END_TEST
 
+/* A near callback that collides (and tries to forget) the very space being
+ * collided: refused, since the callback runs from the pair loop; the outer
+ * call still reports all its pairs. */
+typedef struct reenter_ctx { dSpaceID space; pairset outer, inner; } reenter_ctx;
+
+static void reenter_cb(void *data, dGeomID a, dGeomID b)
+{
+    reenter_ctx *c = data;
+    ps_add(&c->outer, a, b);
+    mk_ode_space_collide(c->space, &c->inner, ps_cb);
+    mk_ode_space_forget(c->space);
+}
+
+START_TEST(test_space_reentry_refused)
+{
+    reenter_ctx c = {0};
+    pairset want = {0};
+    mk_ode_stats st;
+    dInitODE2(0);
+    c.space = dSimpleSpaceCreate(0);
+    dGeomSetPosition(dCreateSphere(c.space, 1), 0, 0, 0);
+    dGeomSetPosition(dCreateSphere(c.space, 1), 1.5, 0, 0);
+    dGeomSetPosition(dCreateSphere(c.space, 1), 3, 0, 0);
+    dSpaceCollide(c.space, &want, ps_cb);
+    ck_assert_int_eq(want.n, 2);
+    mk_ode_stats_reset();
+    mk_ode_space_collide(c.space, &c, reenter_cb);
+    mk_ode_get_stats(&st);
+    ps_assert_equal(&c.outer, &want, "re-entered", 0);
+    ck_assert_int_eq(c.inner.n, 0);
+    ck_assert_int_eq((int)st.errors, 4); /* two refused collides and two refused forgets */
+    ck_assert_int_eq(st.last_error, MK_ERR_BAD_ARGUMENT);
+    ck_assert_int_eq((int)st.pairs_reported, 2);
+    c.outer.n = 0;
+    mk_ode_space_collide(c.space, &c.outer, ps_cb); /* the state survived */
+    ps_assert_equal(&c.outer, &want, "after", 1);
+    ps_free(&c.outer);
+    ps_free(&c.inner);
+    ps_free(&want);
+    dSpaceDestroy(c.space);
+    mk_ode_close();
+}
+END_TEST
+
 /* ---- narrowphase tests ---- */
 
 #define MAXC 8
@@ -1148,6 +1192,7 @@ int main(void)
     tcase_add_test(bp, test_hash_space_bug);
     tcase_add_test(bp, test_nan_aabb);
     tcase_add_test(bp, test_space_bad_input);
+    tcase_add_test(bp, test_space_reentry_refused);
     tcase_add_test(np, test_sphere_sphere_matches_ode);
     tcase_add_test(np, test_sphere_plane_matches_ode);
     tcase_add_test(np, test_sphere_box_matches_ode);

@@ -1,0 +1,756 @@
+/* box_box.c: the contact manifold of two boxes in one pass (see
+ * manifold_internal.h, mk_box_box_collide).
+ *
+ * mk_collide's general polytope path builds B's pose in A's frame, runs
+ * SAT, turns the axis into polygons (mk_feat), clips them in A's frame into
+ * a list of candidates (mk_mf), reduces the list and moves it to world
+ * space, each step in its own frame with its own copies. Two boxes, the
+ * pair every rigid-body scene is made of, need none of that: here the
+ * relative pose is built once, the 15 axes are tested in closed form
+ * (mk_sat_box_box), and a face axis clips the incident face in the
+ * reference face's own 2D coordinates, where the reference face is the
+ * rectangle |u| <= h_u, |v| <= h_v: a side test is one subtraction, only u
+ * and v (and the height along the normal) are interpolated, and a side no
+ * incident corner is outside of is skipped, so an incident face wholly
+ * inside costs no pass at all. The candidates are reduced to four in those
+ * coordinates (mk_mf_pick4) and written straight into the mk_manifold, each
+ * with two matrix-vector products. The clip is the general Sutherland-
+ * Hodgman clip of clip.c specialised, not a new idea: the same side order,
+ * slop rule, crossing names and candidate order, so the manifold and its
+ * feature IDs are those of the general path (tests/test_clip.c compares
+ * the two on random, stacked and rounded pairs). */
+#include <string.h>
+
+#include "manifold_internal.h"
+#include "polytope.h"
+#include "pose.h"
+#include "sat.h"
+#include "shape_internal.h"
+
+#ifndef MK_WITHOUT_SAT
+
+#define V(i) MK_FEATURE(MK_FEATURE_VERTEX, i)
+#define E(i) MK_FEATURE(MK_FEATURE_EDGE, i)
+#define F(i) MK_FEATURE(MK_FEATURE_FACE, i)
+
+/* A vertex of the incident face while it is clipped: its coordinates in
+ * the reference box's frame along the face's two in-plane axes (x[0] along
+ * axis (k + 1) % 3, x[1] along (k + 2) % 3, k the face's axis) and along
+ * k (z); the features that make it; and, for the edge leaving it, the
+ * reference side it runs along (-1: none) and its feature. */
+typedef struct bb_vert {
+    mk_real x[2], z;
+    mk_feature fref, finc, edge;
+    signed char ref_edge;
+} bb_vert;
+
+/* Side q of a box face (from its corner q to corner q + 1, box_face_corner
+ * order) bounds in-plane coordinate x[ax] with outward sign `sign`. The
+ * pattern is the same for every face: even faces (the - sides) run +v, +u,
+ * -v, -u, odd faces -v, +u, +v, -u. */
+MK_ALWAYS_INLINE int side_axis(int q) { return (q & 1) ? 0 : 1; }
+MK_ALWAYS_INLINE mk_real side_sign(int face, int q) { return q == 1 ? 1 : q == 3 ? -1 : ((q == 0) == !(face & 1)) ? 1 : -1; }
+
+/* One Sutherland-Hodgman pass of clip.c's clip_polygon against side q of
+ * reference face `face`: keeps the part of src where sign * x[ax] - h <=
+ * slop. An inside end within the slop strip stands for the crossing; a
+ * crossing is named by the incident edge and the reference side, or, when
+ * it runs along a side already, by the reference corner between the two
+ * sides (or the face). */
+MK_ALWAYS_INLINE int clip_side(int face, int q, mk_feature finc_face, mk_real sign, int ax, mk_real h, mk_real slop, const bb_vert *src, int n,
+                     bb_vert *dst)
+{
+    /* src[n] repeats src[0] (the closing edge), and dst's will too. */
+    mk_feature side = E(mk_box_face_edge_[face][q]);
+    int m = 0, i;
+    mk_real da = sign * src[0].x[ax] - h;
+    for (i = 0; i < n; ++i) {
+        const bb_vert *a = &src[i], *b = a + 1;
+        mk_real db = sign * b->x[ax] - h;
+        int ina = da <= slop, inb = db <= slop;
+        if (ina) dst[m++] = *a;
+        if (ina != inb) {
+            if ((ina ? da : db) > 0) {
+                if (ina) {
+                    dst[m - 1].ref_edge = (signed char)q;
+                    dst[m - 1].edge = side;
+                }
+            } else {
+                bb_vert *x = &dst[m++];
+                mk_real t = da / (da - db);
+                x->x[0] = a->x[0] + (b->x[0] - a->x[0]) * t;
+                x->x[1] = a->x[1] + (b->x[1] - a->x[1]) * t;
+                x->z = a->z + (b->z - a->z) * t;
+                if (a->ref_edge < 0) {
+                    x->fref = side;
+                    x->finc = a->edge;
+                } else {
+                    int pe = a->ref_edge;
+                    x->fref = pe == ((q + 3) & 3) ? V(mk_box_face_corner_[face][q])
+                              : pe == ((q + 1) & 3) ? V(mk_box_face_corner_[face][(q + 1) & 3])
+                                                    : F(face);
+                    x->finc = finc_face;
+                }
+                if (ina) {
+                    x->ref_edge = (signed char)q;
+                    x->edge = side;
+                } else {
+                    x->ref_edge = a->ref_edge;
+                    x->edge = a->edge;
+                }
+            }
+        }
+        da = db;
+    }
+    if (m > 0) dst[m] = dst[0];
+    return m;
+}
+
+/* Where box_clip writes its points: the manifold itself (m set: A's
+ * pose, the normal in A's frame and in world, A's radius), or the
+ * candidates for the tests (mk_box_box_clip). */
+typedef struct bb_out {
+    mk_manifold *m;
+    const mk_pose *xa, *xb;
+    mk_vec3 n, nw;
+    mk_vec3 off; /* reference A: -R^T t - rb R^T n; reference B: p_B + ra nw (see box_clip) */
+    mk_bb_point *pts;
+} bb_out;
+
+/* Point i of the manifold: its points on A's surface in A's frame (la)
+ * and in world (wa), on B's in B's frame (lb), and its depth; point_b =
+ * point_a - depth n, the contract's relation. */
+MK_ALWAYS_INLINE void put(mk_manifold *out, int i, mk_vec3 nw, mk_vec3 la, mk_vec3 wa, mk_vec3 lb, mk_real depth, uint32_t features)
+{
+    mk_contact_point *c = &out->points[i];
+    c->point_a = wa;
+    c->point_b = mk_v3_mad(wa, -depth, nw);
+    c->local_a = la;
+    c->local_b = lb;
+    c->depth = depth;
+    c->features = features;
+    c->flags = depth < 0 ? MK_CONTACT_SPECULATIVE : 0;
+}
+
+/* Entry (row x, column c) of R (column c = B's axis c in A's frame). */
+MK_ALWAYS_INLINE mk_real rc(const mk_mat3 *R, int x, int c)
+{
+    const mk_vec3 *col = c == 0 ? &R->c0 : c == 1 ? &R->c1 : &R->c2;
+    return x == 0 ? col->x : x == 1 ? col->y : col->z;
+}
+
+/* The clip of mk_box_box_clip (see manifold_internal.h), with the
+ * reference box, the face and `reduce` constant where it is inlined;
+ * returns the count and writes the points as `o` says. */
+MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_real margin, int reduce, const bb_out *o)
+{
+    const mk_shape *ref = ref_is_a ? p->a : p->b, *inc = ref_is_a ? p->b : p->a;
+    mk_real m[3][3], tr[3], hh[3], g[3], hf[2], lo[2], hi[2], rr = p->a->radius + p->b->radius;
+    mk_real sgn = face & 1 ? 1 : -1, gs;
+    mk_real x[MK_BB_CLIP_MAX], y[MK_BB_CLIP_MAX], depth[MK_BB_CLIP_MAX];
+    bb_vert buf[2][MK_BB_CLIP_MAX + 1];
+    int k = face / 2, iu = (k + 1) % 3, iv = (k + 2) % 3, ia, ju, jv, fi, i, q, cnt = 4, cur = 0, n = 0, idx[MK_BB_CLIP_MAX], pick[MK_BB_CLIP_MAX];
+    mk_feature finc_face;
+    /* The incident box in the reference frame: x_ref = m x_inc + tr (R and
+     * t for B in A's frame, R^T and -R^T t for A in B's). */
+    for (i = 0; i < 3; ++i) {
+        m[i][0] = ref_is_a ? rc(&p->r, i, 0) : rc(&p->r, 0, i);
+        m[i][1] = ref_is_a ? rc(&p->r, i, 1) : rc(&p->r, 1, i);
+        m[i][2] = ref_is_a ? rc(&p->r, i, 2) : rc(&p->r, 2, i);
+    }
+    if (ref_is_a) {
+        tr[0] = p->t.x, tr[1] = p->t.y, tr[2] = p->t.z;
+    } else {
+        for (i = 0; i < 3; ++i) tr[i] = -(m[i][0] * p->t.x + m[i][1] * p->t.y + m[i][2] * p->t.z);
+    }
+    hh[0] = ref->u.half_extents.x, hh[1] = ref->u.half_extents.y, hh[2] = ref->u.half_extents.z;
+    g[0] = inc->u.half_extents.x, g[1] = inc->u.half_extents.y, g[2] = inc->u.half_extents.z;
+    hf[0] = hh[iu], hf[1] = hh[iv];
+    /* The incident face: the incident box's face most against the normal
+     * (-sgn e_k in the reference frame faces the incident box), ties to the
+     * lower axis, as mk_support_feature picks it. */
+    {
+        mk_real d0 = mk_fabs_(m[k][0]), d1 = mk_fabs_(m[k][1]), d2 = mk_fabs_(m[k][2]);
+        ia = (d0 >= d1 && d0 >= d2) ? 0 : (d1 >= d2 ? 1 : 2);
+    }
+    fi = 2 * ia + (-sgn * m[k][ia] >= 0);
+    finc_face = F(fi);
+    ju = (ia + 1) % 3, jv = (ia + 2) % 3;
+    gs = fi & 1 ? g[ia] : -g[ia];
+    /* Corners c0 -+ cu -+ cv in box_face_corner order: (-, -), (+, -),
+     * (+, +), (-, +) on a + face, reversed on a - face; only the face's
+     * coordinates (u, v) and the height axis (z). */
+    {
+        const int ax3[3] = {iu, iv, k};
+        int j, first = fi & 1 ? 0 : 3, step = fi & 1 ? 1 : -1;
+        for (j = 0; j < 3; ++j) {
+            int row = ax3[j];
+            mk_real cu = m[row][ju] * g[ju], cv = m[row][jv] * g[jv], c0 = tr[row] + gs * m[row][ia], s = cu + cv, t = cu - cv;
+            mk_real c[4];
+            c[0] = c0 - s, c[1] = c0 + t, c[2] = c0 + s, c[3] = c0 - t;
+            for (i = 0; i < 4; ++i) {
+                mk_real ci = c[first + step * i];
+                if (j < 2) buf[0][i].x[j] = ci;
+                else buf[0][i].z = ci;
+            }
+            if (j < 2) {
+                lo[j] = mk_min(mk_min(c[0], c[1]), mk_min(c[2], c[3]));
+                hi[j] = mk_max(mk_max(c[0], c[1]), mk_max(c[2], c[3]));
+            }
+        }
+        for (i = 0; i < 4; ++i) {
+            bb_vert *v = &buf[0][i];
+            v->fref = F(face);
+            v->finc = V(mk_box_face_corner_[fi][i]);
+            v->ref_edge = -1;
+            v->edge = E(mk_box_face_edge_[fi][i]);
+        }
+        buf[0][4] = buf[0][0];
+    }
+    /* A side no corner is outside of (by more than its slop, m->slop times
+     * the side's length, as clip.c's side_planes sets it) cuts nothing, and
+     * no crossing made by another side is outside it either: skipped. */
+    for (q = 0; q < 4 && cnt > 0; ++q) {
+        int ax = side_axis(q);
+        mk_real sg = side_sign(face, q), side_slop = 2 * slop * hf[1 - ax];
+        if (!((sg > 0 ? hi[ax] : -lo[ax]) - hf[ax] <= side_slop))
+            cnt = clip_side(face, q, finc_face, sg, ax, hf[ax], side_slop, buf[cur], cnt, buf[cur ^ 1]), cur ^= 1;
+    }
+    /* Depths from the heights over the face; candidates beyond the margin go. */
+    for (i = 0; i < cnt; ++i) {
+        const bb_vert *v = &buf[cur][i];
+        mk_real d = rr - (sgn * v->z - hh[k]);
+        if (!(d >= -margin)) continue;
+        x[n] = v->x[0], y[n] = v->x[1], depth[n] = d, idx[n++] = i;
+    }
+    if (reduce && n > MK_MANIFOLD_MAX_POINTS) {
+        n = mk_mf_pick4(n, x, y, depth, pick);
+    } else {
+        for (i = 0; i < n; ++i) pick[i] = i;
+    }
+    for (i = 0; i < n; ++i) {
+        const bb_vert *v = &buf[cur][idx[pick[i]]];
+        mk_real c[3], w = sgn * v->z - hh[k];
+        uint32_t features = ref_is_a ? MK_FEATURE_PAIR(v->fref, v->finc) : MK_FEATURE_PAIR(v->finc, v->fref);
+        c[iu] = v->x[0], c[iv] = v->x[1], c[k] = v->z;
+        if (o->m) {
+            /* q is a point of the incident core. Reference A: la is q on
+             * A's face pushed out by A's radius, lb = R^T (q - t) - rb
+             * R^T n on B's surface. Reference B: lb is q moved by the
+             * height less B's radius along B's face normal (-sgn e_k), la
+             * = R q + t + ra n, and in world R_B q + p_B + ra nw: one
+             * rotation per frame. */
+            mk_real ra = p->a->radius;
+            mk_vec3 q3 = mk_v3(c[0], c[1], c[2]), la, lb, wa;
+            if (ref_is_a) {
+                la = mk_v3_mad(q3, ra - w, o->n);
+                wa = mk_v3_add(mk_mat3_mul_v3(o->xa->r, la), o->xa->p);
+                lb = mk_v3_add(mk_mat3_tmul_v3(p->r, q3), o->off);
+            } else {
+                la = mk_v3_mad(mk_v3_add(mk_mat3_mul_v3(p->r, q3), p->t), ra, o->n);
+                wa = mk_v3_add(mk_mat3_mul_v3(o->xb->r, q3), o->off);
+                c[k] -= sgn * (w - p->b->radius);
+                lb = mk_v3(c[0], c[1], c[2]);
+            }
+            put(o->m, i, o->nw, la, wa, lb, depth[pick[i]], features);
+        } else {
+            o->pts[i].q = mk_v3(c[0], c[1], c[2]);
+            o->pts[i].depth = depth[pick[i]];
+            o->pts[i].height = w;
+            o->pts[i].features = features;
+        }
+    }
+    return n;
+}
+
+int mk_box_box_clip(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_real margin, int reduce, mk_bb_point *out)
+{
+    bb_out o;
+    memset(&o, 0, sizeof o);
+    o.pts = out;
+    return box_clip(p, ref_is_a, face, slop, margin, reduce, &o);
+}
+
+/* The reduced clip written into the manifold, with the reference box and
+ * face as constants. */
+static int clip_reduced(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_real margin, const bb_out *o)
+{
+    return ref_is_a ? box_clip(p, 1, face, slop, margin, 1, o) : box_clip(p, 0, face, slop, margin, 1, o);
+}
+
+/* ---- SAT: the 15 axes in closed form (sat.h) -------------------------------- */
+
+/* The lower half-edge of each box edge ID, in polytope.h's box view. */
+static const unsigned char box_half_edge[12] = {11, 15, 9, 13, 2, 4, 0, 6, 3, 7, 1, 5};
+
+/* Box edge ID of the edge along `axis` at the corner whose other two
+ * coordinates have the signs of s (minko/manifold.h numbering). */
+static int box_edge(int axis, const mk_real *s)
+{
+    int lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2;
+    return 4 * axis + (s[lo] > 0) + 2 * (s[hi] > 0);
+}
+
+/* Edge pair (e_i of A, R_j of B): axis L = e_i x R_j = (0, -R_i2j, R_i1j) in
+ * the cyclic order (i, i1, i2), skipped when the edges are nearly parallel.
+ * A's extent along L is |R_i2j| a_i1 + |R_i1j| a_i2; B's is
+ * sum_k |(R^T L)_k| b_k, from the products rather than the cofactor identity
+ * of a rotation, which the rounded R satisfies only to a few ulps (and the
+ * division by a small |L| would magnify). An edge pair can change the
+ * answer only if it separates by more than `level`, the better face's
+ * separation (mk_sat_options: edges must beat the face); the offset less
+ * A's extent, u, bounds its separation times |L| from above (B's extent is
+ * >= 0), so one that cannot beat a negative level even so, u / |L| < level
+ * by a margin far above the rounding of either side (u^2 > lim |L|^2, lim
+ * = level^2 (1 + 64 eps); MK_REAL_MAX for a level >= 0), is dropped before
+ * B's extent, the square root and the division. */
+/* The best edge pair of two boxes so far: e_i of A, R_j of B (i = -1: none). */
+typedef struct box_edges { mk_real sep; int i, j; } box_edges;
+
+MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i,
+                                    int j, mk_real lim, box_edges *best)
+{
+    int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+    mk_real l2 = r[i1][j] * r[i1][j] + r[i2][j] * r[i2][j], sep, u;
+    if (!(l2 > MK_SAT_PARALLEL * MK_SAT_PARALLEL)) return;
+    u = mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]);
+    if (u < 0 && u * u > lim * l2) return;
+    sep = u - mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] -
+          mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
+    sep /= mk_sqrt_(l2);
+    if (sep > best->sep) {
+        best->sep = sep;
+        best->i = i;
+        best->j = j;
+    }
+}
+
+/* The kind, features, separation and normal of edge pair (e_i of A, R_j
+ * of B) into *out: L = e_i x R_j pointing from A to B; A's supporting edge
+ * sits at the corner with the signs of L, B's at the corner with those of
+ * -R^T L. Reads rows (i + 1) % 3 and (i + 2) % 3 of r and the same entries
+ * of d; row i and d[i] are multiplied by L_i = 0 only. */
+static void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, mk_real sep, mk_sat_result *out)
+{
+    static const unsigned char next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
+    int i1 = next[i], i2 = prev[i], lo = j == 0 ? 1 : 0, hi = j == 2 ? 1 : 2;
+    mk_real L[3], blo, bhi, l;
+    L[i] = 0, L[i1] = -r[i2][j], L[i2] = r[i1][j];
+    if (L[0] * d[0] + L[1] * d[1] + L[2] * d[2] < 0) L[0] = -L[0], L[1] = -L[1], L[2] = -L[2];
+    /* The two components of -R^T L that name B's edge (box_edge(j, .)). */
+    blo = -(r[0][lo] * L[0] + r[1][lo] * L[1] + r[2][lo] * L[2]);
+    bhi = -(r[0][hi] * L[0] + r[1][hi] * L[1] + r[2][hi] * L[2]);
+    l = mk_sqrt_(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+    out->kind = MK_SAT_EDGES;
+    out->a = box_half_edge[box_edge(i, L)];
+    out->b = box_half_edge[4 * j + (blo > 0) + 2 * (bhi > 0)];
+    out->separation = sep;
+    out->normal = mk_v3(L[0] / l, L[1] / l, L[2] / l);
+}
+
+/* The separation along an edge pair named by opt->first (the box view's
+ * half-edges), kept only if it ends the search (a face axis named there
+ * has been tested by box_hint_apart). */
+MK_ALWAYS_INLINE int box_first_edges(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d,
+                                     const mk_sat_options *opt, box_edges *e)
+{
+    int i = opt->first_a, j = opt->first_b;
+    if (!(i >= 0 && i < 24 && j >= 0 && j < 24)) return 0;
+    box_edge_axis(r, ar, a, b, d, mk_box_hull_edge_id(i) / 4, mk_box_hull_edge_id(j) / 4, -MK_REAL_MAX, e);
+    if (e->sep > opt->stop_above) return 1;
+    e->sep = -MK_REAL_MAX; /* not apart along it: the full search answers exactly as without the hint */
+    e->i = e->j = -1;
+    return 0;
+}
+
+/* The separation along one face axis of two boxes: A's face axis k (kind
+ * MK_SAT_FACE_A) or B's (MK_SAT_FACE_B), from u, the axis's components
+ * along the other box's axes (row k of R for A's, column k for B's), and d,
+ * B's centre's offset along it. Returns 1 with *out filled as the full
+ * search would stop there when it separates by more than stop. */
+MK_ALWAYS_INLINE int face_apart(const mk_vec3 *ha, const mk_vec3 *hb, mk_sat_kind kind, int k, mk_vec3 u, mk_real d, mk_real stop,
+                                mk_sat_result *out)
+{
+    int of_a = kind == MK_SAT_FACE_A;
+    const mk_vec3 *own = of_a ? ha : hb, *other = of_a ? hb : ha;
+    mk_real h = k == 0 ? own->x : k == 1 ? own->y : own->z, s = d >= 0 ? 1 : -1;
+    mk_real sep = mk_fabs_(d) - h - (mk_fabs_(u.x) * other->x + mk_fabs_(u.y) * other->y + mk_fabs_(u.z) * other->z);
+    if (!(sep > stop)) return 0;
+    out->kind = kind;
+    if (of_a) {
+        out->a = 2 * k + (d >= 0);
+        out->b = -1;
+        out->normal = mk_v3(k == 0 ? s : 0, k == 1 ? s : 0, k == 2 ? s : 0);
+    } else {
+        out->a = -1;
+        out->b = 2 * k + (d < 0);
+        out->normal = mk_v3_scale(u, s);
+    }
+    out->best = out->separation = sep;
+    out->complete = 0;
+    return 1;
+}
+
+/* Is the face index named by a hint (opt->first and its index) valid? */
+MK_ALWAYS_INLINE int face_hint(mk_sat_kind kind, int face) { return (kind == MK_SAT_FACE_A || kind == MK_SAT_FACE_B) && face >= 0 && face < 6; }
+
+MK_ALWAYS_INLINE const mk_vec3 *column(const mk_mat3 *m, int k) { return k == 0 ? &m->c0 : k == 1 ? &m->c1 : &m->c2; }
+
+/* Edge pair hint (half-edges ea of A, eb of B) from world poses: the two
+ * rows of R and entries of t that box_edge_axis reads (row i and t_i only
+ * ever multiply L_i = 0: zeros), as mk_pair_of_poses_ forms them. */
+static int edge_hint_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 dp, int ea, int eb,
+                           mk_real stop, mk_sat_result *out)
+{
+    mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
+    int i = mk_box_hull_edge_id(ea) / 4, j = mk_box_hull_edge_id(eb) / 4, n, k;
+    box_edges best;
+    for (n = 1; n < 3; ++n) {
+        int row = (i + n) % 3;
+        const mk_vec3 *e = column(ra, row);
+        for (k = 0; k < 3; ++k) r[row][k] = mk_v3_dot(*e, *column(rb, k));
+        ar[row][j] = mk_fabs_(r[row][j]);
+        d[row] = mk_v3_dot(*e, dp);
+    }
+    r[i][0] = r[i][1] = r[i][2] = d[i] = 0;
+    a[0] = ha->x, a[1] = ha->y, a[2] = ha->z;
+    b[0] = hb->x, b[1] = hb->y, b[2] = hb->z;
+    best.sep = -MK_REAL_MAX;
+    box_edge_axis(r, ar, a, b, d, i, j, MK_REAL_MAX, &best);
+    if (!(best.sep > stop)) return 0;
+    edge_result(r, d, i, j, best.sep, out);
+    out->best = best.sep;
+    out->complete = 0;
+    return 1;
+}
+
+int mk_sat_box_box_edge_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_pose *xa, const mk_pose *xb, int ia, int ib, mk_real stop,
+                              mk_sat_result *out)
+{
+    return ia >= 0 && ia < 24 && ib >= 0 && ib < 24 && edge_hint_apart(ha, hb, &xa->r, &xb->r, mk_v3_sub(xb->p, xa->p), ia, ib, stop, out);
+}
+
+/* A face axis named by opt->first, straight from R before anything is set
+ * up: a pair that stays apart along last frame's face axis (the common
+ * case of boxes whose bounding boxes overlap) costs this and nothing else. */
+static int box_hint_apart(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    int face = opt->first == MK_SAT_FACE_A ? opt->first_a : opt->first_b, k = face / 2;
+    mk_vec3 u;
+    if (!face_hint(opt->first, face)) return 0;
+    if (opt->first == MK_SAT_FACE_A) {
+        /* Row k of R: B's axes' components along A's axis k. */
+        u = k == 0 ? mk_v3(R->c0.x, R->c1.x, R->c2.x) : k == 1 ? mk_v3(R->c0.y, R->c1.y, R->c2.y) : mk_v3(R->c0.z, R->c1.z, R->c2.z);
+        return face_apart(&ha, &hb, opt->first, k, u, k == 0 ? t.x : k == 1 ? t.y : t.z, opt->stop_above, out);
+    }
+    u = k == 0 ? R->c0 : k == 1 ? R->c1 : R->c2;
+    return face_apart(&ha, &hb, opt->first, k, u, mk_v3_dot(u, t), opt->stop_above, out);
+}
+
+/* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
+ * frame), so every axis below is a few multiply-adds on scalars. Only the
+ * index of the best axis of each kind is kept while testing; its normal is
+ * built once at the end. The early stop looks at whole groups (A's faces,
+ * B's faces, the edges): the answer is then the best of the groups tested. */
+/* A's face axis i and B's face axis j (B's offset along it into db[j]),
+ * spelled out for constant indices like the edges. */
+MK_ALWAYS_INLINE void box_face_a(mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i, mk_real *best, int *at)
+{
+    mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
+    if (sep > *best) *best = sep, *at = i;
+}
+
+MK_ALWAYS_INLINE void box_face_b(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, mk_real *db, int j,
+                                 mk_real *best, int *at)
+{
+    mk_real sep;
+    db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
+    sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
+    if (sep > *best) *best = sep, *at = j;
+}
+
+MK_ALWAYS_INLINE void sat_boxes(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3], sa = -MK_REAL_MAX, sb = -MK_REAL_MAX, stop = opt->stop_above;
+    box_edges e;
+    int i, j, fa = 0, fb = -1, stopped = 0;
+    mk_sat_kind kind;
+    if (opt->first != MK_SAT_NONE && box_hint_apart(ha, hb, R, t, opt, out)) return;
+    r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
+    r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
+    r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) ar[i][j] = mk_fabs_(r[i][j]);
+    a[0] = ha.x, a[1] = ha.y, a[2] = ha.z;
+    b[0] = hb.x, b[1] = hb.y, b[2] = hb.z;
+    d[0] = t.x, d[1] = t.y, d[2] = t.z;
+    e.sep = -MK_REAL_MAX;
+    e.i = e.j = -1;
+    /* Last frame's separating edge pair first: a pair that stays apart ends here. */
+    if (opt->first == MK_SAT_EDGES) stopped = box_first_edges(r, ar, a, b, d, opt, &e);
+    /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
+    if (!stopped) {
+        box_face_a(ar, a, b, d, 0, &sa, &fa);
+        box_face_a(ar, a, b, d, 1, &sa, &fa);
+        box_face_a(ar, a, b, d, 2, &sa, &fa);
+        stopped = sa > stop;
+    }
+    /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along +R_j. */
+    if (!stopped) {
+        box_face_b(r, ar, a, b, d, db, 0, &sb, &fb);
+        box_face_b(r, ar, a, b, d, db, 1, &sb, &fb);
+        box_face_b(r, ar, a, b, d, db, 2, &sb, &fb);
+        stopped = sb > stop;
+    }
+    /* Edge pairs: only the winner's normal and features are worked out. */
+    if (!stopped) {
+        /* Spelled out: with constant indices the axes' terms stay in registers. */
+        mk_real level = mk_max(sa, sb);
+        mk_real lim = level < 0 ? level * level * (1 + 64 * MK_REAL_EPSILON) : MK_REAL_MAX;
+        box_edge_axis(r, ar, a, b, d, 0, 0, lim, &e);
+        box_edge_axis(r, ar, a, b, d, 0, 1, lim, &e);
+        box_edge_axis(r, ar, a, b, d, 0, 2, lim, &e);
+        box_edge_axis(r, ar, a, b, d, 1, 0, lim, &e);
+        box_edge_axis(r, ar, a, b, d, 1, 1, lim, &e);
+        box_edge_axis(r, ar, a, b, d, 1, 2, lim, &e);
+        box_edge_axis(r, ar, a, b, d, 2, 0, lim, &e);
+        box_edge_axis(r, ar, a, b, d, 2, 1, lim, &e);
+        box_edge_axis(r, ar, a, b, d, 2, 2, lim, &e);
+        stopped = e.sep > stop;
+    }
+    /* The normal and feature indices of the chosen axis only. */
+    kind = mk_sat_choose(sa, sb, e.sep, e.i >= 0, stopped, opt, out);
+    out->kind = kind;
+    if (kind == MK_SAT_FACE_A) {
+        mk_real si = d[fa] >= 0 ? 1 : -1;
+        out->a = 2 * fa + (d[fa] >= 0);
+        out->b = -1;
+        out->separation = sa;
+        out->normal = mk_v3(fa == 0 ? si : 0, fa == 1 ? si : 0, fa == 2 ? si : 0);
+    } else if (kind == MK_SAT_FACE_B) {
+        mk_real sj = db[fb] >= 0 ? 1 : -1;
+        out->a = -1;
+        out->b = 2 * fb + (db[fb] < 0);
+        out->separation = sb;
+        out->normal = mk_v3(sj * r[0][fb], sj * r[1][fb], sj * r[2][fb]);
+    } else {
+        edge_result(r, d, e.i, e.j, e.sep, out);
+    }
+}
+
+void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    sat_boxes(ha, hb, R, t, opt, out);
+}
+
+/* ---- the whole pair ---------------------------------------------------------- */
+
+static mk_real min3(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
+
+/* An edge pair whose cross product is a face normal (an edge of B lying
+ * parallel to a face of A, as in every box resting flat on another) is that
+ * face's axis, with the same separation; which of the two SAT reports is
+ * round-off. Name it as the face, so a flat contact clips to a face: the
+ * normal is one of A's axes (faces of A first, as SAT breaks ties) or one
+ * of B's; the face is the one the normal leaves A through, or enters B
+ * through. */
+static void face_axis(const mk_pair *p, mk_sat_result *sat)
+{
+    mk_real one = 1 - 64 * MK_REAL_EPSILON, n[3], nb[3];
+    mk_vec3 l = mk_mat3_tmul_v3(p->r, sat->normal);
+    int k;
+    n[0] = sat->normal.x, n[1] = sat->normal.y, n[2] = sat->normal.z;
+    nb[0] = l.x, nb[1] = l.y, nb[2] = l.z;
+    for (k = 0; k < 3; ++k) {
+        if (mk_fabs_(n[k]) >= one) {
+            sat->kind = MK_SAT_FACE_A;
+            sat->a = 2 * k + (n[k] > 0);
+            sat->b = -1;
+            return;
+        }
+    }
+    for (k = 0; k < 3; ++k) {
+        if (mk_fabs_(nb[k]) >= one) {
+            sat->kind = MK_SAT_FACE_B;
+            sat->a = -1;
+            sat->b = 2 * k + (nb[k] < 0);
+            return;
+        }
+    }
+}
+
+/* An empty manifold (the normal is undefined then; kept as before). */
+static void none(mk_manifold *out, mk_vec3 n)
+{
+    out->count = 0;
+    out->normal = n;
+}
+
+/* Cores apart (rounded or speculative boxes): SAT's separation is only a
+ * lower bound of their distance, reached when the points built along the
+ * axis realise it (a face over a face, two edges crossing inside both). If
+ * they fall short (two cube edges side by side: the face axes separate by
+ * less than the edges are apart, and the faces' clip is empty), the exact
+ * core distance comes from GJK (mk_collide's generic path) instead. */
+#ifndef MK_WITHOUT_GJK
+static int realised(mk_real deepest, mk_real depth, const mk_pair *p)
+{
+    mk_real size_a = p->a->radius + mk_v3_max_abs(p->a->u.half_extents), size_b = p->b->radius + mk_v3_max_abs(p->b->u.half_extents);
+    return deepest >= depth - 256 * MK_REAL_EPSILON * (mk_v3_max_abs(p->t) + size_a + size_b);
+}
+#endif
+
+/* Two boxes that were apart last frame and still are along the same axis:
+ * that one axis straight from the world poses, before the relative pose or
+ * anything else is built, and the hint kept for the next frame (an edge
+ * axis, mk_sat_box_box_edge_apart, stays named as one, even where
+ * face_axis() would rename it as a face it has become parallel to: the same
+ * axis). A face axis needs one column of each rotation dotted with the
+ * other three: the axis's components along the other box's axes.
+ * Broadphase pairs of boxes whose bounding boxes overlap mostly end here.
+ * Otherwise the hint is dropped (the full search answers exactly as with
+ * it) and 0 returned. The separations are mk_sat_box_box's with that hint,
+ * to rounding. */
+static int stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache)
+{
+    mk_sat_kind kind = (mk_sat_kind)(cache->axis - MK_MF_APART_HINT);
+    mk_real rr = a->radius + b->radius;
+    if (kind == MK_SAT_EDGES) {
+        mk_sat_result sat;
+        if (mk_sat_box_box_edge_apart(&a->u.half_extents, &b->u.half_extents, xa, xb, cache->reference, (int)cache->face - 1, margin + rr,
+                                      &sat) &&
+            sat.best - rr > margin) {
+            cache->reference = sat.a;
+            cache->face = (mk_feature)(sat.b + 1);
+            return 1;
+        }
+    } else if (kind == MK_SAT_FACE_A || kind == MK_SAT_FACE_B) {
+        int of_a = kind == MK_SAT_FACE_A, face = of_a ? cache->reference : (int)cache->face - 1, k = face / 2;
+        const mk_mat3 *own = of_a ? &xa->r : &xb->r, *other = of_a ? &xb->r : &xa->r;
+        const mk_vec3 *h = of_a ? &a->u.half_extents : &b->u.half_extents, *g = of_a ? &b->u.half_extents : &a->u.half_extents;
+        if (face >= 0 && face < 6) {
+            const mk_vec3 *e = k == 0 ? &own->c0 : k == 1 ? &own->c1 : &own->c2;
+            mk_real d = mk_v3_dot(*e, mk_v3_sub(xb->p, xa->p));
+            mk_real sep = mk_fabs_(d) - (k == 0 ? h->x : k == 1 ? h->y : h->z) -
+                          (mk_fabs_(mk_v3_dot(*e, other->c0)) * g->x + mk_fabs_(mk_v3_dot(*e, other->c1)) * g->y +
+                           mk_fabs_(mk_v3_dot(*e, other->c2)) * g->z);
+            if (sep > margin + rr && sep - rr > margin) {
+                cache->reference = of_a ? 2 * k + (d >= 0) : -1;
+                cache->face = (mk_feature)(of_a ? 0 : 2 * k + (d < 0) + 1);
+                return 1;
+            }
+        }
+    }
+    cache->axis = cache->reference = 0;
+    cache->face = 0;
+    return 0;
+}
+
+/* Everything after the hint (out of line: the pair that stays apart
+ * needs none of this frame). */
+static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+                               mk_manifold *out)
+{
+    mk_real ra = a->radius, rb = b->radius, deepest = -MK_REAL_MAX;
+    mk_vec3 ha = a->u.half_extents, hb = b->u.half_extents, n, nw;
+    mk_sat_options opt;
+    mk_sat_result sat;
+    mk_pair p;
+    int i, count;
+    {
+        /* Bounding balls about the centres farther apart than the margin. */
+        mk_real reach = ra + mk_v3_len(ha) + rb + mk_v3_len(hb) + margin;
+        if (mk_v3_len2(mk_v3_sub(xb->p, xa->p)) > reach * reach) {
+            if (cache) cache->axis = MK_SAT_NONE;
+            none(out, mk_v3(0, 0, 1));
+            return 1;
+        }
+    }
+    p = mk_pair_of_poses_(a, xa, b, xb);
+    opt.stop_above = margin + ra + rb;
+    opt.first = MK_SAT_NONE; /* the hint was tested above */
+    opt.first_a = opt.first_b = -1;
+    opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
+    opt.prefer_rel = MK_MF_PREFER_REL;
+    opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0 : MK_MF_PREFER_ABS * mk_min(min3(ha), min3(hb));
+    opt.hold_face = !cache || cache->mode == MK_MANIFOLD_STABLE_IDS;
+    sat_boxes(ha, hb, &p.r, p.t, &opt, &sat);
+    if (sat.kind == MK_SAT_EDGES) face_axis(&p, &sat);
+    if (sat.best - ra - rb > margin) {
+        if (cache) {
+            cache->axis = MK_MF_APART_HINT + (int)sat.kind;
+            cache->reference = sat.a;
+            cache->face = (mk_feature)(sat.b + 1);
+        }
+        none(out, xa->r.c2);
+        return 1;
+    }
+    if (cache) cache->axis = (int)sat.kind;
+    n = sat.normal;
+    nw = mk_mat3_mul_v3(xa->r, n);
+    if (sat.kind != MK_SAT_EDGES) {
+        /* Rounded cores apart clip without slop (clip.c). */
+        int ref_is_a = sat.kind == MK_SAT_FACE_A, face = ref_is_a ? sat.a : sat.b;
+        mk_real slop = sat.separation > 0 && ra + rb > 0 ? 0 : cache && cache->mode == MK_MANIFOLD_BEST_FACE ? MK_MF_SLOP_EXACT : MK_MF_SLOP_IDS;
+        bb_out o;
+        o.m = out;
+        o.pts = NULL;
+        o.xa = xa;
+        o.xb = xb;
+        o.n = n;
+        o.nw = nw;
+        o.off = ref_is_a ? mk_v3_neg(mk_mat3_tmul_v3(p.r, mk_v3_mad(p.t, rb, n))) : mk_v3_mad(xb->p, ra, nw);
+        count = clip_reduced(&p, ref_is_a, face, slop, margin, &o);
+        for (i = 0; i < count; ++i) deepest = mk_max(deepest, out->points[i].depth);
+    } else {
+        /* Edge pair: the closest points of the two edges, one point. */
+        mk_vec3 a0, a1, b0, b1, qa;
+        mk_real s, t, gap = sat.separation, depth;
+        int ea = mk_box_hull_edge_id(sat.a), eb = mk_box_hull_edge_id(sat.b);
+        mk_box_edge_ends(ha, ea, &a0, &a1);
+        mk_box_edge_ends(hb, eb, &b0, &b1);
+        b0 = mk_v3_add(mk_mat3_mul_v3(p.r, b0), p.t);
+        b1 = mk_v3_add(mk_mat3_mul_v3(p.r, b1), p.t);
+        mk_segment_segment(a0, a1, b0, b1, &s, &t);
+        qa = mk_v3_lerp(a0, a1, s);
+        /* Apart, the edges' closest points are a gap only if neither end clamped. */
+        if (gap > 0) gap = mk_v3_dist(qa, mk_v3_lerp(b0, b1, t));
+        depth = ra + rb - gap;
+        count = 0;
+        if (depth >= -margin) {
+            mk_vec3 la = mk_v3_mad(qa, ra, n);
+            put(out, 0, nw, la, mk_v3_add(mk_mat3_mul_v3(xa->r, la), xa->p), mk_mat3_tmul_v3(p.r, mk_v3_sub(mk_v3_mad(la, -depth, n), p.t)), depth,
+                MK_FEATURE_PAIR(MK_FEATURE(MK_FEATURE_EDGE, ea), MK_FEATURE(MK_FEATURE_EDGE, eb)));
+            deepest = depth;
+            count = 1;
+        }
+    }
+#ifndef MK_WITHOUT_GJK
+    if (sat.separation > 0 && !realised(deepest, ra + rb - sat.separation, &p)) return 0;
+#else
+    (void)deepest;
+#endif
+    out->normal = nw;
+    out->count = count;
+    return 1;
+}
+
+/* A pair that was apart last frame: its axis, else the whole pass (both
+ * ends tail calls, so neither path keeps the other's frame). */
+static MK_NOINLINE int hinted(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+                              mk_manifold *out)
+{
+    if (stay_apart(a, xa, b, xb, margin, cache)) {
+        none(out, mk_v3(0, 0, 1));
+        return 1;
+    }
+    return collide(a, xa, b, xb, margin, cache, out);
+}
+
+int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+                       mk_manifold *out)
+{
+    return cache && cache->axis > MK_MF_APART_HINT ? hinted(a, xa, b, xb, margin, cache, out) : collide(a, xa, b, xb, margin, cache, out);
+}
+
+#endif

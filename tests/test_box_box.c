@@ -1,0 +1,254 @@
+/* test_box_box.c: mk_collide_pose on two boxes (box_box.c, one fused pass)
+ * against an oracle assembled here from the general pieces it replaces:
+ * mk_sat_box_box with the same options, an edge pair parallel to a face
+ * named as that face, the general polygon clip of mk_box_face against the
+ * other box's mk_support_feature (mk_mf_clip), mk_mf_reduce, the edges'
+ * closest points, and the move to world space written out. Cold calls
+ * and warm sequences in both mk_manifold_modes, rounded boxes, margins:
+ * the same count, feature IDs in the same order, normals, depths and all
+ * four points to rounding. */
+#include <string.h>
+
+#include "manifold_internal.h"
+#include "polytope.h"
+#include "pose.h"
+#include "sat.h"
+#include "support/mk_test.h"
+
+#if defined(MK_SINGLE)
+#  define TOL 2e-4
+#else
+#  define TOL 1e-10
+#endif
+
+#define REQUIRE(cond, ...) do { if (!(cond)) ck_abort_msg(__VA_ARGS__); } while (0)
+
+static mk_real min3(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
+
+/* The oracle's face for an edge-pair axis that is a face normal (A's first). */
+static void rename_face(const mk_pair *p, mk_sat_result *s)
+{
+    mk_real one = 1 - 64 * MK_REAL_EPSILON;
+    mk_vec3 n = s->normal, l = mk_mat3_tmul_v3(p->r, n);
+    mk_real na[3], nb[3];
+    int k;
+    na[0] = n.x, na[1] = n.y, na[2] = n.z;
+    nb[0] = l.x, nb[1] = l.y, nb[2] = l.z;
+    for (k = 0; k < 3; ++k)
+        if (mk_fabs_(na[k]) >= one) {
+            s->kind = MK_SAT_FACE_A, s->a = 2 * k + (na[k] > 0), s->b = -1;
+            return;
+        }
+    for (k = 0; k < 3; ++k)
+        if (mk_fabs_(nb[k]) >= one) {
+            s->kind = MK_SAT_FACE_B, s->a = -1, s->b = 2 * k + (nb[k] < 0);
+            return;
+        }
+}
+
+/* The manifold of two boxes by the general pieces; returns 0 when the
+ * oracle would hand the pair to GJK (rounded cores apart, not realised). */
+static int oracle(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, const mk_manifold_cache *cache,
+                  mk_manifold *out)
+{
+    mk_pair p = mk_pair_of_poses_(a, xa, b, xb);
+    mk_real ra = a->radius, rb = b->radius, deepest = -MK_REAL_MAX;
+    mk_sat_options o = mk_sat_defaults();
+    mk_sat_result s;
+    mk_mf m;
+    mk_vec3 nw;
+    int i;
+    o.stop_above = margin + ra + rb;
+    /* A hint that failed is dropped: the search is then the cold one's. */
+    o.prefer = cache && cache->axis <= MK_MF_APART_HINT ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
+    o.prefer_rel = MK_MF_PREFER_REL;
+    o.prefer_abs = o.prefer == MK_SAT_NONE ? 0 : MK_MF_PREFER_ABS * mk_min(min3(a->u.half_extents), min3(b->u.half_extents));
+    o.hold_face = !cache || cache->mode == MK_MANIFOLD_STABLE_IDS;
+    mk_sat_box_box(a->u.half_extents, b->u.half_extents, &p.r, p.t, &o, &s);
+    if (s.kind == MK_SAT_EDGES) rename_face(&p, &s);
+    out->count = 0;
+    if (s.best - ra - rb > margin) return 1;
+    m.count = 0;
+    m.margin = margin;
+    m.normal = s.normal;
+    m.cores_apart = s.separation > 0;
+    m.slop = cache && cache->mode == MK_MANIFOLD_BEST_FACE ? MK_MF_SLOP_EXACT : MK_MF_SLOP_IDS;
+    if (s.kind == MK_SAT_FACE_A) {
+        mk_feat ref, inc;
+        mk_box_face(a, s.a / 2, s.a & 1, &ref);
+        mk_support_feature(b, mk_mat3_tmul_v3(p.r, mk_v3_neg(s.normal)), &inc);
+        mk_feat_transform(&inc, &p);
+        mk_mf_clip(&m, &ref, 1, &inc, ra, rb);
+    } else if (s.kind == MK_SAT_FACE_B) {
+        mk_feat ref, inc;
+        mk_box_face(b, s.b / 2, s.b & 1, &ref);
+        mk_feat_transform(&ref, &p);
+        mk_support_feature(a, s.normal, &inc);
+        mk_mf_clip(&m, &ref, 0, &inc, ra, rb);
+    } else {
+        mk_vec3 a0, a1, b0, b1, qa;
+        mk_real u, v, gap = s.separation;
+        int ea = mk_box_hull_edge_id(s.a), eb = mk_box_hull_edge_id(s.b);
+        mk_box_edge_ends(a->u.half_extents, ea, &a0, &a1);
+        mk_box_edge_ends(b->u.half_extents, eb, &b0, &b1);
+        b0 = mk_v3_add(mk_mat3_mul_v3(p.r, b0), p.t);
+        b1 = mk_v3_add(mk_mat3_mul_v3(p.r, b1), p.t);
+        mk_segment_segment(a0, a1, b0, b1, &u, &v);
+        qa = mk_v3_lerp(a0, a1, u);
+        if (gap > 0) gap = mk_v3_dist(qa, mk_v3_lerp(b0, b1, v));
+        mk_mf_add(&m, mk_v3_mad(qa, ra, s.normal), ra + rb - gap, MK_FEATURE(MK_FEATURE_EDGE, ea), MK_FEATURE(MK_FEATURE_EDGE, eb));
+    }
+    mk_mf_reduce(&m);
+    for (i = 0; i < m.count; ++i) deepest = mk_max(deepest, m.p[i].depth);
+    if (s.separation > 0 && !(deepest >= ra + rb - s.separation -
+                              256 * MK_REAL_EPSILON * (mk_v3_max_abs(p.t) + ra + mk_v3_max_abs(a->u.half_extents) + rb + mk_v3_max_abs(b->u.half_extents))))
+        return 0;
+    nw = mk_mat3_mul_v3(xa->r, m.normal);
+    out->normal = nw;
+    out->count = m.count;
+    for (i = 0; i < m.count; ++i) {
+        mk_contact_point *c = &out->points[i];
+        mk_vec3 pb = mk_v3_mad(m.p[i].pa, -m.p[i].depth, m.normal);
+        c->local_a = m.p[i].pa;
+        c->local_b = mk_mat3_tmul_v3(p.r, mk_v3_sub(pb, p.t));
+        c->point_a = mk_v3_add(mk_mat3_mul_v3(xa->r, c->local_a), xa->p);
+        c->point_b = mk_v3_mad(c->point_a, -m.p[i].depth, nw);
+        c->depth = m.p[i].depth;
+        c->features = m.p[i].features;
+    }
+    return 1;
+}
+
+/* In single precision the two clips' round-off can also decide
+ * differently whether a point deep inside a random overlap lies in the
+ * clip slop strip (kept as it is) or beyond it (clipped): positions then
+ * differ by up to the strip's width, ids and depths do not. */
+#if defined(MK_SINGLE)
+#  define STRIP(h) (2 * MK_MF_SLOP_IDS * (h))
+#else
+#  define STRIP(h) 0
+#endif
+
+/* A clipped point where an incident edge nearly parallel to a side plane
+ * crosses it is ill-conditioned along that plane (test_clip.c): both
+ * clips put it on the same plane at the same depth, but along the plane
+ * their round-off may move it by eps |edge| / |sin|. d (world) passes if it
+ * is within tol, or within tol along the normal and along one of the
+ * reference box's in-plane axes (the box whose axis the normal is). */
+static int close_on_plane(mk_vec3 d, mk_vec3 n, const mk_pose *xa, const mk_pose *xb, mk_real tol)
+{
+    const mk_pose *ref = xa;
+    mk_vec3 l;
+    mk_real e[3], one = 1 - (mk_real)TOL;
+    if (mk_v3_max_abs(d) <= tol) return 1;
+    if (!(mk_fabs_(mk_v3_dot(n, xa->r.c0)) >= one || mk_fabs_(mk_v3_dot(n, xa->r.c1)) >= one || mk_fabs_(mk_v3_dot(n, xa->r.c2)) >= one))
+        ref = xb;
+    l = mk_mat3_tmul_v3(ref->r, d);
+    e[0] = mk_fabs_(l.x), e[1] = mk_fabs_(l.y), e[2] = mk_fabs_(l.z);
+    if (!(mk_fabs_(mk_v3_dot(d, n)) <= tol)) return 0;
+    return (e[0] <= tol) + (e[1] <= tol) + (e[2] <= tol) >= 2;
+}
+
+static void same(const mk_manifold *got, const mk_manifold *want, const mk_pose *xa, const mk_pose *xb, mk_real scale, mk_real strip, int c,
+                 int f)
+{
+    int i;
+    mk_real tol = (mk_real)TOL * scale, ptol = tol + strip;
+    REQUIRE(got->count == want->count, "case %d frame %d: %d points, oracle %d", c, f, got->count, want->count);
+    if (got->count == 0) return;
+    REQUIRE(mk_v3_max_abs(mk_v3_sub(got->normal, want->normal)) <= (mk_real)TOL, "case %d frame %d: normal", c, f);
+    for (i = 0; i < got->count; ++i) {
+        const mk_contact_point *g = &got->points[i], *w = &want->points[i];
+        REQUIRE(g->features == w->features, "case %d frame %d point %d: features %08x, oracle %08x", c, f, i, g->features, w->features);
+        REQUIRE(mk_fabs_(g->depth - w->depth) <= tol, "case %d frame %d point %d: depth %.17g, oracle %.17g", c, f, i, (double)g->depth,
+                (double)w->depth);
+        REQUIRE(close_on_plane(mk_v3_sub(g->point_a, w->point_a), got->normal, xa, xb, ptol) &&
+                    close_on_plane(mk_v3_sub(g->point_b, w->point_b), got->normal, xa, xb, ptol) &&
+                    close_on_plane(mk_v3_sub(mk_mat3_mul_v3(xa->r, g->local_a), mk_mat3_mul_v3(xa->r, w->local_a)), got->normal, xa, xb, ptol) &&
+                    close_on_plane(mk_v3_sub(mk_mat3_mul_v3(xb->r, g->local_b), mk_mat3_mul_v3(xb->r, w->local_b)), got->normal, xa, xb, ptol),
+                "case %d frame %d point %d: points differ", c, f, i);
+        REQUIRE(g->flags == (g->depth < 0 ? MK_CONTACT_SPECULATIVE : 0u), "case %d frame %d point %d: flags", c, f, i);
+    }
+}
+
+/* Random overlapping, stacked (square, turned, tilted; corners on the side
+ * planes where the slop decides) and separated pairs, some rounded, some
+ * with a margin, each followed for a few frames of slow motion with a
+ * cache in either mode, its first frame also cold. */
+START_TEST(box_box_matches_general_pieces)
+{
+    mk_rng r = {4242};
+    int c, f, faces = 0, many = 0, edges = 0, apart = 0;
+    for (c = 0; c < 1500; ++c) {
+        mk_shape a, b;
+        int kind = c % 4;
+        mk_real rad = (mk_real)(c % 7 == 0 ? 0.05 : 0), margin = (mk_real)(c % 5 == 0 ? 0.1 : 0);
+        mk_transform xa = mk_transform_make(mk_rng_v3(&r, -3, 3), mk_rng_quat(&r)), xb;
+        mk_quat spin;
+        mk_vec3 vel;
+        mk_manifold_cache cache;
+        memset(&cache, 0, sizeof cache);
+        cache.mode = (c / 4) % 2 ? MK_MANIFOLD_BEST_FACE : MK_MANIFOLD_STABLE_IDS;
+        mk_shape_box(mk_rng_v3(&r, 0.1, 1), rad, &a);
+        if (kind == 0 || kind == 3) {
+            mk_shape_box(mk_rng_v3(&r, 0.1, 1), rad, &b);
+            xb = mk_transform_make(mk_v3_mad(xa.p, (mk_real)mk_rng_range(&r, 0, kind == 3 ? 2.5 : 1.2), mk_rng_dir(&r)), mk_rng_quat(&r));
+        } else {
+            mk_vec3 h = a.u.half_extents;
+            mk_quat tilt = mk_quat_from_axis_angle(mk_rng_dir(&r), (mk_real)(kind == 1 ? 0 : mk_rng_range(&r, 0, 0.03)));
+            mk_quat yaw = mk_quat_from_axis_angle(mk_v3(0, 0, 1), (mk_real)(c % 8 == 1 ? 0 : mk_rng_range(&r, -3.2, 3.2)));
+            b = a;
+            if (c % 2) mk_shape_box(mk_v3_mul(h, mk_rng_v3(&r, 0.5, 1.5)), rad, &b);
+            xb = mk_transform_make(mk_v3((mk_real)mk_rng_range(&r, -0.3, 0.3), 0,
+                                         h.z + b.u.half_extents.z + 2 * rad - (mk_real)mk_rng_range(&r, -0.01, 0.05)),
+                                   mk_quat_mul(tilt, yaw));
+            xb.p = mk_transform_point(xa, xb.p);
+            xb.q = mk_quat_mul(xa.q, xb.q);
+        }
+        vel = mk_rng_v3(&r, -0.002, 0.002);
+        spin = mk_quat_from_axis_angle(mk_rng_dir(&r), (mk_real)mk_rng_range(&r, 0, 0.004));
+        for (f = 0; f < 6; ++f) {
+            mk_pose pa, pb;
+            mk_manifold got, want;
+            mk_manifold_cache before = cache;
+            mk_real scale = mk_v3_max_abs(xa.p) + mk_v3_max_abs(xb.p) + 2;
+            mk_real strip = STRIP(mk_max(mk_v3_max_abs(a.u.half_extents), mk_v3_max_abs(b.u.half_extents)));
+            mk_pose_from_transform(xa, &pa);
+            mk_pose_from_transform(xb, &pb);
+            if (f == 0) {
+                MK_ASSERT_STATUS(mk_collide_pose(&a, &pa, &b, &pb, margin, NULL, &got), MK_OK);
+                if (oracle(&a, &pa, &b, &pb, margin, NULL, &want)) same(&got, &want, &pa, &pb, scale, strip, c, -1);
+            }
+            MK_ASSERT_STATUS(mk_collide_pose(&a, &pa, &b, &pb, margin, &cache, &got), MK_OK);
+            if (oracle(&a, &pa, &b, &pb, margin, &before, &want)) {
+                same(&got, &want, &pa, &pb, scale, strip, c, f);
+                if (got.count == 0) apart++;
+                else if (MK_FEATURE_TYPE(MK_FEATURE_PAIR_A(got.points[0].features)) == MK_FEATURE_EDGE &&
+                         MK_FEATURE_TYPE(MK_FEATURE_PAIR_B(got.points[0].features)) == MK_FEATURE_EDGE && got.count == 1)
+                    edges++;
+                else faces++;
+                many += got.count == 4;
+            }
+            xb.p = mk_v3_add(xb.p, vel);
+            xb.q = mk_quat_normalize(mk_quat_mul(spin, xb.q));
+        }
+    }
+    /* Every path was taken many times. */
+    ck_assert_int_gt(faces, 3000);
+    ck_assert_int_gt(many, 1500);
+    ck_assert_int_gt(edges, 100);
+    ck_assert_int_gt(apart, 300);
+}
+END_TEST
+
+static Suite *box_box_suite(void)
+{
+    Suite *s = suite_create("box_box");
+    TCase *tc = tcase_create("fused");
+    tcase_set_timeout(tc, 60);
+    tcase_add_test(tc, box_box_matches_general_pieces);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+int main(void) { return mk_test_run(box_box_suite()); }
