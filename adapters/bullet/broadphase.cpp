@@ -20,19 +20,18 @@ namespace {
 
 // Bullet's btHashedOverlappingPairCache with the same deterministic dispatch
 // (pairs visited in descending (uid0, uid1) order, which is what Bullet's
-// quicksort with its ">" predicate gives, and Bullet's loop as it is,
-// removals included) without Bullet's quicksort of every pair every step.
-// The pair array only changes through addOverlappingPair and
-// removeOverlappingPair (a removal moves the last pair into the hole), both
-// overridden here to flag it: while nothing changed the last order is reused
-// as it is (a settled or sleeping scene costs nothing). After a change the
-// entries whose index still holds their pair keep their order, the pairs at
-// the other indices (new or moved) are sorted by themselves and merged in:
-// O(n + k log k) for k changed places, and a radix sort on keys packed to the
-// uids' width when most places changed (the first step). Keys are unique, so
-// either way the order is exactly the sorted order of the current pairs,
-// Bullet's, whatever the history. Memory: six arrays of the pair count,
-// grown by doubling, reused every step.
+// quicksort with its ">" predicate gives, and Bullet's loop as it is: a pair
+// removed by the callback is followed by whatever the removal moved into its
+// place) without Bullet's quicksort of every pair every step. The pair array
+// only changes through addOverlappingPair (appends) and removeOverlappingPair
+// (moves the last pair into the hole), both overridden here to track where
+// each ordered pair sits, so a step in which no pair came or went costs
+// nothing, and after changes the surviving order is kept, the new pairs are
+// sorted among themselves and merged in: O(n + k log k) for k new pairs, a
+// radix sort on keys packed to the uids' width when most pairs are new (the
+// first step). Keys are unique, so the order is exactly the sorted order of
+// the current pairs, Bullet's, whatever the history. Memory: a few arrays of
+// the pair count, grown by doubling, reused every step.
 class PairCache : public btHashedOverlappingPairCache {
 public:
     using btHashedOverlappingPairCache::processAllOverlappingPairs;
@@ -44,10 +43,16 @@ public:
             return;
         }
         btBroadphasePairArray &pa = getOverlappingPairArray();
-        if (m_changed || (size_t)pa.size() != m_order.size()) update_order(pa);
-        // m_order is ascending: walk it from the end.
-        for (size_t i = m_order.size(); i > 0;) {
-            btBroadphasePair *pair = &pa[m_order[i - 1].index];
+        if (m_changed) update_order(pa);
+        // m_walk holds the indices in ascending key order as the walk
+        // began (Bullet's index list): walk it from the end.
+        for (size_t i = m_walk.size(); i > 0;) {
+            const int at = m_walk[i - 1];
+            if (at >= pa.size()) {  // a removal emptied this place
+                i--;
+                continue;
+            }
+            btBroadphasePair *pair = &pa[at];
             if (callback->processOverlap(*pair))
                 removeOverlappingPair(pair->m_pProxy0, pair->m_pProxy1, dispatcher);
             else
@@ -56,19 +61,33 @@ public:
     }
     btBroadphasePair *addOverlappingPair(btBroadphaseProxy *proxy0, btBroadphaseProxy *proxy1) override
     {
-        m_changed = true;
-        return btHashedOverlappingPairCache::addOverlappingPair(proxy0, proxy1);
+        const int before = getNumOverlappingPairs();
+        btBroadphasePair *pair = btHashedOverlappingPairCache::addOverlappingPair(proxy0, proxy1);
+        if (getNumOverlappingPairs() > before) {  // appended at `before`
+            m_pos.push_back(kNew);
+            m_new_count++;
+            m_changed = true;
+        }
+        return pair;
     }
     void *removeOverlappingPair(btBroadphaseProxy *proxy0, btBroadphaseProxy *proxy1, btDispatcher *dispatcher) override
     {
-        m_changed = true;
+        const btBroadphasePair *pair = findPair(proxy0, proxy1);
+        if (pair) {
+            const int at = (int)(pair - &getOverlappingPairArray()[0]);
+            forget(at);
+        }
         return btHashedOverlappingPairCache::removeOverlappingPair(proxy0, proxy1, dispatcher);
     }
 
 private:
     struct Entry {
-        unsigned u0, u1;  // uids (+ 1) of the pair at `index` when sorted
-        int index;
+        unsigned u0, u1;  // uids (+ 1)
+        int index;        // the pair's place in the pair array; kGone once removed
+    };
+    enum : int {
+        kNew = -1,  // m_pos of a pair not ordered yet
+        kGone = -1  // Entry::index of a removed pair
     };
     static bool before(const Entry &a, const Entry &b) { return a.u0 != b.u0 ? a.u0 < b.u0 : a.u1 < b.u1; }
     // Bullet orders a missing proxy (uid -1) last: uid + 1.
@@ -78,33 +97,49 @@ private:
         return Entry{uid_of(pa[i].m_pProxy0), uid_of(pa[i].m_pProxy1), i};
     }
 
+    // The pair at `at` is about to be removed: the last pair moves there.
+    void forget(int at)
+    {
+        m_changed = true;
+        const int last = (int)m_pos.size() - 1;
+        if (at < 0 || at > last) {  // not tracked: rebuild from scratch
+            m_pos.clear();
+            return;
+        }
+        if (m_pos[(size_t)at] == kNew) m_new_count--;
+        else m_order[(size_t)m_pos[(size_t)at]].index = kGone;
+        if (at != last) {
+            m_pos[(size_t)at] = m_pos[(size_t)last];
+            if (m_pos[(size_t)at] != kNew) m_order[(size_t)m_pos[(size_t)at]].index = at;
+        }
+        m_pos.pop_back();
+    }
+
     void update_order(const btBroadphasePairArray &pa)
     {
         m_changed = false;
         const int n = pa.size();
-        if (m_seen.size() < (size_t)n) m_seen.resize((size_t)n, 0);
-        if (++m_stamp == 0) {  // wrapped: no index may look seen
-            std::fill(m_seen.begin(), m_seen.end(), 0u);
-            m_stamp = 1;
-        }
-        m_keep.clear();
-        for (const Entry &e : m_order) {
-            if (e.index >= n) continue;
-            const Entry now = entry_of(pa, e.index);
-            if (now.u0 != e.u0 || now.u1 != e.u1) continue;
-            m_keep.push_back(e);
-            m_seen[(size_t)e.index] = m_stamp;
-        }
-        m_new.clear();
-        for (int i = 0; i < n; i++)
-            if (m_seen[(size_t)i] != m_stamp) m_new.push_back(entry_of(pa, i));
-        if (m_new.size() > (size_t)n / 4) {
+        if ((int)m_pos.size() != n || m_new_count > n / 4) {
+            // Untracked changes, or mostly new pairs: sort them all.
             radix_sort(pa);
-            return;
+        } else {
+            m_keep.clear();
+            for (const Entry &e : m_order)
+                if (e.index != kGone) m_keep.push_back(e);
+            m_new.clear();
+            for (int i = 0; i < n && (int)m_new.size() < m_new_count; i++)
+                if (m_pos[(size_t)i] == kNew) m_new.push_back(entry_of(pa, i));
+            std::sort(m_new.begin(), m_new.end(), before);
+            m_order.resize((size_t)n);
+            std::merge(m_keep.begin(), m_keep.end(), m_new.begin(), m_new.end(), m_order.begin(), before);
         }
-        std::sort(m_new.begin(), m_new.end(), before);
-        m_order.resize((size_t)n);
-        std::merge(m_keep.begin(), m_keep.end(), m_new.begin(), m_new.end(), m_order.begin(), before);
+        m_new_count = 0;
+        m_pos.resize((size_t)n);
+        m_walk.resize((size_t)n);
+        for (int k = 0; k < n; k++) {
+            m_pos[(size_t)m_order[(size_t)k].index] = k;
+            m_walk[(size_t)k] = m_order[(size_t)k].index;
+        }
     }
 
     void radix_sort(const btBroadphasePairArray &pa)
@@ -141,11 +176,13 @@ private:
         }
     }
 
-    std::vector<Entry> m_order, m_keep, m_new;
+    std::vector<Entry> m_order;  // every ordered pair, ascending keys (removed ones marked kGone)
+    std::vector<int> m_pos;      // by pair index: place in m_order, or kNew
+    std::vector<int> m_walk;     // pair indices in m_order's order when it was last updated
+    std::vector<Entry> m_keep, m_new;
     std::vector<unsigned long long> m_keys, m_tmp_keys;
-    std::vector<unsigned> m_seen;  // m_stamp at the indices whose entry was kept
-    unsigned m_stamp = 0;
-    bool m_changed = true;
+    int m_new_count = 0;         // pairs at kNew
+    bool m_changed = false;
 };
 
 mk_aabb to_aabb(const btVector3 &lo, const btVector3 &hi) { return mk_aabb_make(to_mk(lo), to_mk(hi)); }

@@ -741,6 +741,44 @@ START_TEST(bp_deterministic_dispatch_order)
         ck_assert_int_eq((int)ordered.seen.size(), cache->getNumOverlappingPairs());
         ck_assert(ordered.seen == reference.seen);
     }
+    // A callback that removes pairs during the ordered walk: every pair is
+    // still visited, the removed ones are gone, and the next walk is again
+    // exactly Bullet's order.
+    struct Remover : btOverlapCallback {
+        std::vector<std::pair<int, int>> seen;
+        bool processOverlap(btBroadphasePair &pair) override
+        {
+            seen.push_back(std::make_pair(pair.m_pProxy0->m_uniqueId, pair.m_pProxy1->m_uniqueId));
+            return (pair.m_pProxy0->m_uniqueId + pair.m_pProxy1->m_uniqueId) % 5 == 0;
+        }
+    };
+    {
+        btOverlappingPairCache *cache = bp.getOverlappingPairCache();
+        std::vector<std::pair<int, int>> all;
+        for (int i = 0; i < cache->getNumOverlappingPairs(); i++)
+            all.push_back(std::make_pair(cache->getOverlappingPairArray()[i].m_pProxy0->m_uniqueId,
+                                         cache->getOverlappingPairArray()[i].m_pProxy1->m_uniqueId));
+        btDispatcherInfo info;
+        info.m_deterministicOverlappingPairs = true;
+        Remover remover;
+        cache->processAllOverlappingPairs(&remover, &dispatcher, info);
+        std::sort(remover.seen.begin(), remover.seen.end());
+        remover.seen.erase(std::unique(remover.seen.begin(), remover.seen.end()), remover.seen.end());
+        std::sort(all.begin(), all.end());
+        ck_assert(remover.seen == all);
+        int removed = 0;
+        for (const std::pair<int, int> &u : all) removed += (u.first + u.second) % 5 == 0;
+        ck_assert_int_gt(removed, 0);
+        ck_assert_int_eq(cache->getNumOverlappingPairs(), (int)all.size() - removed);
+        btHashedOverlappingPairCache bullets;
+        for (int i = 0; i < cache->getNumOverlappingPairs(); i++)
+            bullets.addOverlappingPair(cache->getOverlappingPairArray()[i].m_pProxy0,
+                                       cache->getOverlappingPairArray()[i].m_pProxy1);
+        Recorder ordered, reference;
+        cache->processAllOverlappingPairs(&ordered, &dispatcher, info);
+        bullets.processAllOverlappingPairs(&reference, &dispatcher, info);
+        ck_assert(ordered.seen == reference.seen);
+    }
     for (btBroadphaseProxy *p : proxies) bp.destroyProxy(p, &dispatcher);
     ck_assert_int_eq(bp.take_error(), MK_OK);
 }
