@@ -1,5 +1,6 @@
 /* box_box.c: the contact manifold of two boxes in one pass (see
- * manifold_internal.h, mk_box_box_collide).
+ * manifold_internal.h, mk_box_box_collide), and the 15-axis SAT of two
+ * boxes it starts from (mk_sat_box_box, sat.h; mk_distance uses it too).
  *
  * mk_collide's general polytope path builds B's pose in A's frame, runs
  * SAT, turns the axis into polygons (mk_feat), clips them in A's frame into
@@ -7,10 +8,10 @@
  * space, each step in its own frame with its own copies. Two boxes, the
  * pair every rigid-body scene is made of, need none of that: here the
  * relative pose is built once, the 15 axes are tested in closed form
- * (mk_sat_box_box), and a face axis clips the incident face in the
- * reference face's own 2D coordinates, where the reference face is the
- * rectangle |u| <= h_u, |v| <= h_v: a side test is one subtraction, only u
- * and v (and the height along the normal) are interpolated, and a side no
+ * (inlined), and a face axis clips the incident face in the reference
+ * face's own 2D coordinates, where the reference face is the rectangle
+ * |u| <= h_u, |v| <= h_v: a side test is one subtraction, only u and v
+ * (and the height along the normal) are interpolated, and a side no
  * incident corner is outside of is skipped, so an incident face wholly
  * inside costs no pass at all. The candidates are reduced to four in those
  * coordinates (mk_mf_pick4) and written straight into the mk_manifold, each
@@ -18,7 +19,11 @@
  * Hodgman clip of clip.c specialised, not a new idea: the same side order,
  * slop rule, crossing names and candidate order, so the manifold and its
  * feature IDs are those of the general path (tests/test_clip.c compares
- * the two on random, stacked and rounded pairs). */
+ * the clips on random, stacked and rounded pairs, tests/test_box_box.c
+ * whole manifolds, cold and warm). Where the instructions go is in
+ * minko/manifold.h; the Sutherland-Hodgman passes, which copy every kept
+ * vertex once per cutting side, and SAT's nine edge axes are the largest
+ * parts. */
 #include <string.h>
 
 #include "manifold_internal.h"
@@ -49,7 +54,11 @@ typedef struct bb_vert {
  * pattern is the same for every face: even faces (the - sides) run +v, +u,
  * -v, -u, odd faces -v, +u, +v, -u. */
 MK_ALWAYS_INLINE int side_axis(int q) { return (q & 1) ? 0 : 1; }
-MK_ALWAYS_INLINE mk_real side_sign(int face, int q) { return q == 1 ? 1 : q == 3 ? -1 : ((q == 0) == !(face & 1)) ? 1 : -1; }
+MK_ALWAYS_INLINE mk_real side_sign(int face, int q)
+{
+    static const mk_real sign[2][4] = {{1, 1, -1, -1}, {-1, 1, 1, -1}};
+    return sign[face & 1][q];
+}
 
 /* One Sutherland-Hodgman pass of clip.c's clip_polygon against side q of
  * reference face `face`: keeps the part of src where sign * x[ax] - h <=
@@ -149,7 +158,8 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
     mk_real sgn = face & 1 ? 1 : -1, gs;
     mk_real x[MK_BB_CLIP_MAX], y[MK_BB_CLIP_MAX], depth[MK_BB_CLIP_MAX];
     bb_vert buf[2][MK_BB_CLIP_MAX + 1];
-    int k = face / 2, iu = (k + 1) % 3, iv = (k + 2) % 3, ia, ju, jv, fi, i, q, cnt = 4, cur = 0, n = 0, idx[MK_BB_CLIP_MAX], pick[MK_BB_CLIP_MAX];
+    static const unsigned char next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
+    int k = face >> 1, iu = next[k], iv = prev[k], ia, ju, jv, fi, i, q, cnt = 4, cur = 0, n = 0, idx[MK_BB_CLIP_MAX], pick[MK_BB_CLIP_MAX];
     mk_feature finc_face;
     /* The incident box in the reference frame: x_ref = m x_inc + tr (R and
      * t for B in A's frame, R^T and -R^T t for A in B's). */
@@ -175,37 +185,33 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
     }
     fi = 2 * ia + (-sgn * m[k][ia] >= 0);
     finc_face = F(fi);
-    ju = (ia + 1) % 3, jv = (ia + 2) % 3;
+    ju = next[ia], jv = prev[ia];
     gs = fi & 1 ? g[ia] : -g[ia];
     /* Corners c0 -+ cu -+ cv in box_face_corner order: (-, -), (+, -),
      * (+, +), (-, +) on a + face, reversed on a - face; only the face's
      * coordinates (u, v) and the height axis (z). */
     {
-        const int ax3[3] = {iu, iv, k};
-        int j, first = fi & 1 ? 0 : 3, step = fi & 1 ? 1 : -1;
+        mk_real c[3][4];
+        int j;
         for (j = 0; j < 3; ++j) {
-            int row = ax3[j];
+            int row = j == 0 ? iu : j == 1 ? iv : k;
             mk_real cu = m[row][ju] * g[ju], cv = m[row][jv] * g[jv], c0 = tr[row] + gs * m[row][ia], s = cu + cv, t = cu - cv;
-            mk_real c[4];
-            c[0] = c0 - s, c[1] = c0 + t, c[2] = c0 + s, c[3] = c0 - t;
-            for (i = 0; i < 4; ++i) {
-                mk_real ci = c[first + step * i];
-                if (j < 2) buf[0][i].x[j] = ci;
-                else buf[0][i].z = ci;
-            }
-            if (j < 2) {
-                lo[j] = mk_min(mk_min(c[0], c[1]), mk_min(c[2], c[3]));
-                hi[j] = mk_max(mk_max(c[0], c[1]), mk_max(c[2], c[3]));
-            }
+            c[j][0] = c0 - s, c[j][1] = c0 + t, c[j][2] = c0 + s, c[j][3] = c0 - t;
         }
         for (i = 0; i < 4; ++i) {
             bb_vert *v = &buf[0][i];
+            int at = fi & 1 ? i : 3 - i;
+            v->x[0] = c[0][at], v->x[1] = c[1][at], v->z = c[2][at];
             v->fref = F(face);
             v->finc = V(mk_box_face_corner_[fi][i]);
             v->ref_edge = -1;
             v->edge = E(mk_box_face_edge_[fi][i]);
         }
         buf[0][4] = buf[0][0];
+        for (j = 0; j < 2; ++j) {
+            lo[j] = mk_min(mk_min(c[j][0], c[j][1]), mk_min(c[j][2], c[j][3]));
+            hi[j] = mk_max(mk_max(c[j][0], c[j][1]), mk_max(c[j][2], c[j][3]));
+        }
     }
     /* A side no corner is outside of (by more than its slop, m->slop times
      * the side's length, as clip.c's side_planes sets it) cuts nothing, and

@@ -1,8 +1,9 @@
 /* bp_sweep.c: every overlapping pair from scratch, with no pairs kept between
  * calls: a sort and sweep in rows. It serves a pairs_only SAP's busy updates
  * (the proxies' boxes, statics among them, pairs reported to the pair
- * table) and mk_bp_sweep_boxes (a caller's array of boxes, the pairs handed
- * out as found, with no proxies, pair table or per-pair call at all).
+ * table, or kept as found for the set alone) and mk_bp_sweep_boxes (a
+ * caller's array of boxes, the pairs handed out as found, with no proxies,
+ * pair table or per-pair call at all).
  *
  * Why rows: a plain sort and sweep on one axis tests every pair that
  * overlaps on that axis, and on a scene spread over a plane (ODE's exploded
@@ -25,14 +26,16 @@
  * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
  * quantisation, rows; made with headroom) and start from the last sweep's
  * order, so a coherent scene needs an insertion sort, O(n), instead of the
- * radix sort; a plan is remade when it is old, when boxes crowd the ends
- * of its ranges, or when a box is taller than its rows (the one thing that
- * would make it wrong).
+ * radix sort (boxes that changed rows are sorted apart and merged in); a
+ * plan is remade when it is old, when boxes crowd the ends of its ranges,
+ * or when a box is taller than its rows (the one thing that would make it
+ * wrong).
  *
- * Cost: O(n) keys, one insertion sort bounded to 4 moves per box or one
- * radix sort of n keys (one counting pass, two or three scatter passes, the
- * last one writing the sweep's arrays), and for each box the boxes of its
- * three rows that overlap it on the sweep axis. */
+ * Cost: O(n) keys, one insertion sort bounded to 4 moves per box (plus a
+ * radix sort of the boxes that changed rows, at most about n / 8) or one
+ * radix sort of n keys (counted as they are made, two or three scatter
+ * passes, the last one writing the sweep's arrays), and for each box the
+ * boxes of its three rows that overlap it on the sweep axis. */
 #include <math.h>
 #include <string.h>
 
@@ -47,14 +50,14 @@
 #define MK_SWEEP_END_ 0xFFFFFFFFu  /* rlo[n]: above every box's rhi */
 
 /* The keys' 32 sort bits (row << 16 | q(lo), above 24 bits of slot) are
- * radix-sorted in three digits of 12, 12 and 8 bits, whose histograms one
- * counting pass makes; a digit that every key shares costs nothing (a scene
- * spread over fewer than 256 rows: two passes). */
+ * radix-sorted in three digits of 12, 12 and 8 bits, the first two counted
+ * as the keys are made; a digit that every key shares costs nothing (a
+ * scene spread over fewer than 256 rows: two passes). */
 #define MK_SWEEP_HIST_ (4096 + 4096 + 256)
 
 /* The frame of one sweep: axes, quantisation of the sweep axis, rows. */
 typedef struct frame_ {
-    int ax, ay;           /* sweep axis, row axis */
+    int ax, ay, az;       /* sweep axis, row axis, the third one */
     double x0, xscale;    /* q(x) = floor((x - x0) * xscale), clamped */
     double y0, inv_h;     /* row(y) = floor((y - y0) * inv_h), clamped */
     double h;             /* row height: at least every box's extent on ay */
@@ -164,6 +167,20 @@ static inline int src_in(const src_ *v, uint32_t s)
 static double lo_of(const mk_aabb *b, int axis) { return (double)(&b->lo.x)[axis]; }
 static double hi_of(const mk_aabb *b, int axis) { return (double)(&b->hi.x)[axis]; }
 
+/* The box with its axes in the order row, third, sweep: the sweep's copies
+ * are kept so, and boxes tested against them are put so, since overlap
+ * does not depend on the order of the axes while the test's cost does: it
+ * stops at the first axis that separates, and the sweep axis, which the
+ * scans have already matched (but for rounding), comes last. */
+static inline mk_aabb permuted(const frame_ *f, const mk_aabb *b)
+{
+    const mk_real *lo = &b->lo.x, *hi = &b->hi.x;
+    mk_aabb r;
+    r.lo = mk_v3(lo[f->ay], lo[f->az], lo[f->ax]);
+    r.hi = mk_v3(hi[f->ay], hi[f->az], hi[f->ax]);
+    return r;
+}
+
 /* Monotone in x, so q(lo_b) > q(hi_a) implies lo_b > hi_a. */
 static uint32_t quantise(const frame_ *f, double x)
 {
@@ -246,6 +263,7 @@ static void plan(const src_ *v, frame_ *f)
     for (k = 1; k < 3; ++k) if (var[k] > var[f->ax]) f->ax = k;
     f->ay = f->ax == 0 ? 1 : 0;
     for (k = 0; k < 3; ++k) if (k != f->ax && var[k] > var[f->ay]) f->ay = k;
+    f->az = 3 - f->ax - f->ay;
     xlo = p.lo[f->ax]; xhi = p.hi[f->ax];
     ylo = p.lo[f->ay]; yhi = p.hi[f->ay];
     widen(&xlo, &xhi);
@@ -271,11 +289,13 @@ typedef struct sweep_ctx_ {
     mk_bp *bp;
     const src_ *v;
     struct mk_sweep *w;
-    report_fn report;     /* proxies: each pair goes there; NULL: pairs go to w->out */
+    report_fn report;     /* each pair goes there; NULL: pairs go to w->out, */
+    mk_bp_pair *at, *end; /* at `at`, w->out's end at `end` (pointers: the pairs' stores cannot alias them) */
+    int statics;          /* proxies, statics among them: static-static pairs are left out */
 } sweep_ctx_;
 
 /* w->out is full: double it, unless the caller fixed the capacity. */
-static mk_status grow_out(const sweep_ctx_ *c)
+static mk_status grow_out(sweep_ctx_ *c)
 {
     struct mk_sweep *w = c->w;
     mk_bp *bp = c->bp;
@@ -285,22 +305,23 @@ static mk_status grow_out(const sweep_ctx_ *c)
     if (bp->def.fixed_capacity && cap > bp->pairs.cap) cap = bp->pairs.cap; /* the caller's bound */
     if (cap <= w->outcap) return MK_ERR_CAPACITY;
     if ((st = mk_bp_grow_(bp, (void **)&w->out, sizeof *w->out, (size_t)w->outcap, (size_t)cap)) != MK_OK) return st;
+    c->at = w->out + w->outcap;
+    c->end = w->out + cap;
     w->outcap = cap;
     return MK_OK;
 }
 
-/* An overlapping pair: to the proxies' report (no static-static pair), or
- * into w->out. */
-static inline mk_status emit(const sweep_ctx_ *c, uint32_t a, uint32_t b)
+/* An overlapping pair (no static-static pair): to the report, or into
+ * w->out, with no call (a pairs_only SAP's set comes from there). */
+static inline mk_status emit(sweep_ctx_ *c, uint32_t a, uint32_t b)
 {
-    struct mk_sweep *w = c->w;
     mk_status st;
-    int i;
-    if (c->report) return mk_bp_both_static_(c->bp, a, b) ? MK_OK : c->report(c->bp, a, b);
-    if ((i = w->nout) == w->outcap && (st = grow_out(c)) != MK_OK) return st;
-    w->out[i].a = a < b ? a : b;
-    w->out[i].b = a < b ? b : a;
-    w->nout = i + 1;
+    if (c->statics && mk_bp_both_static_(c->bp, a, b)) return MK_OK;
+    if (c->report) return c->report(c->bp, a, b);
+    if (c->at == c->end && (st = grow_out(c)) != MK_OK) return st;
+    c->at->a = a < b ? a : b;
+    c->at->b = a < b ? b : a;
+    c->at++;
     return MK_OK;
 }
 
@@ -315,7 +336,7 @@ static rows_ rows_of(const struct mk_sweep *w)
     return r;
 }
 
-static inline mk_status test(const sweep_ctx_ *c, rows_ r, int i, int j)
+static inline mk_status test(sweep_ctx_ *c, rows_ r, int i, int j)
 {
     if (!mk_bp_overlap_(&r.box[i], &r.box[j])) return MK_OK;
     return emit(c, r.slot[i], r.slot[j]);
@@ -323,7 +344,7 @@ static inline mk_status test(const sweep_ctx_ *c, rows_ r, int i, int j)
 
 /* Pairs inside one row [s, e): rhi[i] is below the next row's rlo values
  * (and the sentinel), so the scan needs no index bound. */
-static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
+static mk_status sweep_row(sweep_ctx_ *c, int s, int e)
 {
     const rows_ r = rows_of(c->w);
     int i, j;
@@ -339,30 +360,33 @@ static mk_status sweep_row(const sweep_ctx_ *c, int s, int e)
 /* Pairs between row [s, e) and the row above, [t, u): a merge of the two
  * sorted runs; whichever box starts first scans the other run for the
  * boxes starting before it ends (its rhi moved to that row, which ends the
- * scan at the run's end too). */
-static mk_status sweep_rows(const sweep_ctx_ *c, int s, int e, int t, int u)
+ * scan at the run's end too). The two starts compared are kept in
+ * registers (ls moved to the upper row), each step reloading one. */
+static mk_status sweep_rows(sweep_ctx_ *c, int s, int e, int t, int u)
 {
     const rows_ r = rows_of(c->w);
+    uint32_t ls = r.rlo[s] + MK_SWEEP_ROW_, lt = r.rlo[t];
     mk_status st;
     int j;
-    while (s < e && t < u) {
-        if (r.rlo[s] + MK_SWEEP_ROW_ <= r.rlo[t]) {
+    for (;;) {
+        if (ls <= lt) {
             uint32_t hi = r.rhi[s] + MK_SWEEP_ROW_;
             for (j = t; r.rlo[j] <= hi; ++j)
                 if ((st = test(c, r, s, j)) != MK_OK) return st;
-            ++s;
+            if (++s == e) return MK_OK;
+            ls = r.rlo[s] + MK_SWEEP_ROW_;
         } else {
             uint32_t hi = r.rhi[t] - MK_SWEEP_ROW_;
             for (j = s; r.rlo[j] <= hi; ++j)
                 if ((st = test(c, r, j, t)) != MK_OK) return st;
-            ++t;
+            if (++t == u) return MK_OK;
+            lt = r.rlo[t];
         }
     }
-    return MK_OK;
 }
 
 /* Boxes infinite on the row axis against everything: O(n) each. */
-static mk_status sweep_big(const sweep_ctx_ *c, int n, int nbig)
+static mk_status sweep_big(sweep_ctx_ *c, int n, int nbig)
 {
     const struct mk_sweep *w = c->w;
     int i, j;
@@ -370,8 +394,9 @@ static mk_status sweep_big(const sweep_ctx_ *c, int n, int nbig)
     for (i = 0; i < nbig; ++i) {
         uint32_t a = w->big[i];
         const mk_aabb *ba = src_box(c->v, a);
+        const mk_aabb pa = permuted(&w->f, ba);
         for (j = 0; j < n; ++j)
-            if (mk_bp_overlap_(ba, &w->box[j]) && (st = emit(c, a, w->slot[j])) != MK_OK) return st;
+            if (mk_bp_overlap_(&pa, &w->box[j]) && (st = emit(c, a, w->slot[j])) != MK_OK) return st;
         for (j = i + 1; j < nbig; ++j)
             if (mk_bp_overlap_(ba, src_box(c->v, w->big[j])) && (st = emit(c, a, w->big[j])) != MK_OK) return st;
     }
@@ -382,19 +407,23 @@ static mk_status sweep_big(const sweep_ctx_ *c, int n, int nbig)
 
 static int is_big(const frame_ *f, const mk_aabb *b) { return !(hi_of(b, f->ay) - lo_of(b, f->ay) <= MK_REAL_MAX); }
 
-/* What one sort of keys learnt about the plan it used. */
+/* The digits of the radix sort: shift in the key, size, offset in hist. */
+static const struct { int shift; uint32_t size, off; } DIGIT_[3] = {{24, 4096, 0}, {36, 4096, 4096}, {48, 256, 8192}};
+
+static inline uint32_t digit(uint64_t k, int d) { return (uint32_t)(k >> DIGIT_[d].shift) & (DIGIT_[d].size - 1); }
+
+/* What one sort of keys learnt about the plan it used, and what the key
+ * pass in slot order (keys_by_slot) counts for the radix sort as it goes. */
 typedef struct keying_ {
-    int clamped;  /* boxes past either end of the plan's ranges */
     int tall;     /* a box taller than the rows: the plan is wrong, not just slow */
+    int counted;  /* hist holds digits 0 and 1 of the keys, */
+    uint64_t any, all; /* and these their OR and AND (digit 2 differs only where any ^ all does) */
 } keying_;
 
-/* Row 0 and the last row, q = 0 and the largest q are where boxes beyond
- * the plan's ranges land (the plan's headroom keeps the others off them). */
 static inline uint64_t key_of(const frame_ *f, const mk_aabb *b, uint32_t slot, keying_ *k)
 {
     double ylo = lo_of(b, f->ay);
     uint32_t row = row_of(f, ylo), q = quantise(f, lo_of(b, f->ax));
-    k->clamped += (row - 1u >= MK_SWEEP_ROWS_ - 1u) | (q - 1u >= MK_SWEEP_Q_MAX_ - 1u);
     k->tall |= !((hi_of(b, f->ay) - ylo) * (1.0 + 1.0 / 1024) <= f->h);
     return (uint64_t)row << 40 | (uint64_t)q << 24 | slot;
 }
@@ -407,7 +436,8 @@ static inline void file_box(struct mk_sweep *w, const src_ *v, uint32_t s, uint6
     else key[(*n)++] = key_of(&w->f, b, s, k);
 }
 
-/* Every box in the source, in slot order: keys, and the big ones apart. */
+/* Every box in the source, in slot order: keys (counted for the radix
+ * sort), and the big ones apart. */
 static int keys_by_slot(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k)
 {
     /* Locals: the stores to key[] could alias anything read through pointers. */
@@ -415,27 +445,45 @@ static int keys_by_slot(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k
     const src_ src = *v;
     uint64_t *key = w->key;
     uint32_t *big = w->big, s;
+    uint32_t *h = w->hist;
+    uint64_t any = 0, all = ~(uint64_t)0;
     keying_ kk = *k;
     int n = 0, nb = 0;
+    memset(h, 0, DIGIT_[2].off * sizeof *h);
     for (s = 0; s < src.n; ++s) {
         const mk_aabb *b = src_box(&src, s);
+        uint64_t kb;
         if (!src_in(&src, s)) continue;
-        if (is_big(&f, b)) big[nb++] = s;
-        else key[n++] = key_of(&f, b, s, &kk);
+        if (is_big(&f, b)) {
+            big[nb++] = s;
+            continue;
+        }
+        key[n++] = kb = key_of(&f, b, s, &kk);
+        h[digit(kb, 0)]++;
+        h[DIGIT_[1].off + digit(kb, 1)]++;
+        any |= kb;
+        all &= kb;
     }
+    kk.counted = 1;
+    kk.any = any;
+    kk.all = all;
     *k = kk;
     *nbig = nb;
     return n;
 }
 
-/* The same keys in the order of the last sweep (key[0, w->n) and the big
+/* The same keys in the order of the last sweep (slot[0, w->n) and the big
  * list of the last sweep): with a coherent scene and the same plan they
- * come out nearly sorted. The last sweep's boxes are the ones in the source
- * now but for those added since: proxies created since the last update
- * (flag NEW in the dirty list), or the caller's boxes past the last count;
- * the new ones go last, after any that stopped being big. tmp holds them
- * meanwhile. */
-static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k)
+ * come out nearly sorted, into key[0, returned count). The last sweep's
+ * boxes are the ones in the source now but for those added since: proxies
+ * created since the last update (flag NEW in the dirty list), or the
+ * caller's boxes past the last count. Those, any that stopped being big,
+ * and the boxes that changed rows go to tmp[0, *extra) instead: a box that
+ * changed rows is a row's length away from its place in the order (boxes
+ * lined up in a corridor cross the row line every frame), so sorting it
+ * apart and merging it in is cheaper than moving it there one place at a
+ * time. */
+static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, int *extra_out, keying_ *k)
 {
     mk_bp *bp = v->bp;
     int n = 0, extra = 0, i, nb = 0;
@@ -449,12 +497,29 @@ static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, keyi
         for (s = w->src_n; s < v->n; ++s) file_box(w, v, s, w->tmp, &extra, &nb, k);
     }
     for (i = 0; i < w->n; ++i) {
+        const mk_aabb *b;
+        uint64_t key;
         s = w->slot[i];
-        if (src_in(v, s)) file_box(w, v, s, w->key, &n, &nb, k);
+        if (!src_in(v, s)) continue;
+        b = src_box(v, s);
+        if (is_big(&w->f, b)) { w->big[nb++] = s; continue; }
+        key = key_of(&w->f, b, s, k);
+        if ((uint32_t)(key >> 40) != w->rlo[i] >> 16) w->tmp[extra++] = key; /* another row */
+        else w->key[n++] = key;
     }
-    for (i = 0; i < extra; ++i) w->key[n++] = w->tmp[i];
     *nbig = nb;
+    *extra_out = extra;
     return n;
+}
+
+/* key[0, n) sorted, tmp[0, m) not, n + m keys of room in key: all of them
+ * sorted into key. The radix sort of tmp borrows key[n, n + m) as scratch;
+ * the merge runs from the back, so it never overwrites a key not yet read. */
+static void merge_in(uint64_t *key, int n, uint64_t *tmp, int m)
+{
+    int i = n - 1, j = m - 1, o = n + m - 1;
+    mk_sort_u64_by_(tmp, key + n, m, 3);
+    while (j >= 0) key[o--] = i >= 0 && key[i] > tmp[j] ? key[i--] : tmp[j--];
 }
 
 /* Insertion sort that gives up once it has moved keys `budget` places
@@ -486,38 +551,60 @@ static void insertion_gave_up(struct mk_sweep *w)
     w->sort_wait = w->sort_backoff;
 }
 
-/* Sorted box p is the box of key k: the arrays the sweep reads. */
-static inline void place(struct mk_sweep *w, const src_ *v, int p, uint64_t k)
+/* The arrays the sweep reads, with the frame and the source in locals:
+ * the stores to the arrays could alias them, and make every box reload
+ * them. */
+typedef struct placing_ {
+    frame_ f;
+    src_ v;
+    mk_aabb *box;
+    uint32_t *slot, *rlo, *rhi;
+} placing_;
+
+static placing_ placing_of(const struct mk_sweep *w, const src_ *v)
 {
-    uint32_t s = (uint32_t)(k & 0xFFFFFFu), lo = (uint32_t)(k >> 24);
-    const mk_aabb *b = src_box(v, s);
-    w->box[p] = *b;
-    w->slot[p] = s;
-    w->rlo[p] = lo;
-    w->rhi[p] = (lo & ~MK_SWEEP_Q_MAX_) | quantise(&w->f, hi_of(b, w->f.ax));
+    placing_ pl;
+    pl.f = w->f;
+    pl.v = *v;
+    pl.box = w->box; pl.slot = w->slot; pl.rlo = w->rlo; pl.rhi = w->rhi;
+    return pl;
 }
 
-/* The digits of the radix sort: shift in the key, size, offset in hist. */
-static const struct { int shift; uint32_t size, off; } DIGIT_[3] = {{24, 4096, 0}, {36, 4096, 4096}, {48, 256, 8192}};
+/* Sorted box p is the box of key k. */
+static inline void place(const placing_ *pl, int p, uint64_t k)
+{
+    uint32_t s = (uint32_t)(k & 0xFFFFFFu), lo = (uint32_t)(k >> 24);
+    const mk_aabb *b = src_box(&pl->v, s);
+    pl->box[p] = permuted(&pl->f, b);
+    pl->slot[p] = s;
+    pl->rlo[p] = lo;
+    pl->rhi[p] = (lo & ~MK_SWEEP_Q_MAX_) | quantise(&pl->f, hi_of(b, pl->f.ax));
+}
 
-static inline uint32_t digit(uint64_t k, int d) { return (uint32_t)(k >> DIGIT_[d].shift) & (DIGIT_[d].size - 1); }
-
-/* Histograms of the three digits in one pass; returns the digits some keys
- * differ in (in `need`, lowest first), each histogram turned into bucket
- * starts. */
-static int radix_plan(uint32_t *h, const uint64_t *key, int n, int *need)
+/* Histograms of digits 0 and 1 (unless the key pass counted them) and of
+ * digit 2 when keys differ in it (rows 256 and up, rare); returns the
+ * digits some keys differ in (in `need`, lowest first), each histogram
+ * turned into bucket starts. */
+static int radix_plan(uint32_t *h, const uint64_t *key, int n, keying_ k, int *need)
 {
     int i, d, m = 0;
-    memset(h, 0, MK_SWEEP_HIST_ * sizeof *h);
-    for (i = 0; i < n; ++i) {
-        uint64_t k = key[i];
-        h[digit(k, 0)]++;
-        h[DIGIT_[1].off + digit(k, 1)]++;
-        h[DIGIT_[2].off + digit(k, 2)]++;
+    if (n == 0) return 0;
+    if (!k.counted) {
+        memset(h, 0, DIGIT_[2].off * sizeof *h);
+        for (i = 0; i < n; ++i) {
+            h[digit(key[i], 0)]++;
+            h[DIGIT_[1].off + digit(key[i], 1)]++;
+            k.any |= key[i];
+            k.all &= key[i];
+        }
+    }
+    if (digit(k.any ^ k.all, 2)) {
+        memset(h + DIGIT_[2].off, 0, DIGIT_[2].size * sizeof *h);
+        for (i = 0; i < n; ++i) h[DIGIT_[2].off + digit(key[i], 2)]++;
     }
     for (d = 0; d < 3; ++d) {
         uint32_t *c = h + DIGIT_[d].off, sum = 0, b;
-        if (c[digit(key[0], d)] == (uint32_t)n) continue; /* all in one bucket */
+        if (!digit(k.any ^ k.all, d)) continue; /* the same in every key */
         for (b = 0; b < DIGIT_[d].size; ++b) { uint32_t t = c[b]; c[b] = sum; sum += t; }
         need[m++] = d;
     }
@@ -526,21 +613,36 @@ static int radix_plan(uint32_t *h, const uint64_t *key, int n, int *need)
 
 /* Stable LSD radix sort of key[0, n) by their sort bits, the last pass
  * placing each box straight into the sweep's arrays (no pass of its own). */
-static void sort_and_place(struct mk_sweep *w, const src_ *v, int n)
+static void sort_and_place(struct mk_sweep *w, const src_ *v, int n, keying_ k)
 {
+    const placing_ pl = placing_of(w, v);
     uint64_t *src = w->key, *dst = w->tmp, *sw;
-    int need[3], m = n ? radix_plan(w->hist, w->key, n, need) : 0, p, i;
+    int need[3], m = radix_plan(w->hist, w->key, n, k, need), p, i;
     for (p = 0; p < m; ++p) {
         int d = need[p];
         uint32_t *c = w->hist + DIGIT_[d].off;
         if (p == m - 1) {
-            for (i = 0; i < n; ++i) place(w, v, (int)c[digit(src[i], d)]++, src[i]);
+            for (i = 0; i < n; ++i) place(&pl, (int)c[digit(src[i], d)]++, src[i]);
             return;
         }
         for (i = 0; i < n; ++i) dst[c[digit(src[i], d)]++] = src[i];
         sw = src; src = dst; dst = sw;
     }
-    for (i = 0; i < n; ++i) place(w, v, i, src[i]); /* one bucket: in order already */
+    for (i = 0; i < n; ++i) place(&pl, i, src[i]); /* one bucket: in order already */
+}
+
+/* Boxes beyond the plan's ranges land in row 0 or the last row, at q = 0
+ * or the largest q (the plan's headroom keeps the others off them): too
+ * many there (over 1/16) and the plan is remade. Only a hint, so a sample
+ * of at most about 1024 of the sorted boxes decides. */
+static int crowded(const struct mk_sweep *w, int n)
+{
+    int i, stride = n / MK_SWEEP_SAMPLE_ + 1, c = 0;
+    for (i = 0; i < n; i += stride) {
+        uint32_t row = w->rlo[i] >> 16, q = w->rlo[i] & MK_SWEEP_Q_MAX_;
+        c += (row - 1u >= MK_SWEEP_ROWS_ - 1u) | (q - 1u >= MK_SWEEP_Q_MAX_ - 1u);
+    }
+    return c * stride > n / 16 + 16;
 }
 
 /* Sorted keys of the boxes that fit a row, the big ones listed apart, and
@@ -553,30 +655,38 @@ static void sort_and_place(struct mk_sweep *w, const src_ *v, int n)
 static int sort_keys(struct mk_sweep *w, const src_ *v, int reuse, int *nbig)
 {
     frame_ *f = &w->f;
-    keying_ k = {0, 0};
+    keying_ k = {0, 0, 0, ~(uint64_t)0};
     int n = 0, i, sorted = 0, keep = reuse && !w->crowded && w->age < MK_SWEEP_PLAN_AGE_;
     if (keep && w->sort_wait == 0) {
-        n = keys_in_last_order(w, v, nbig, &k);
-        if (!k.tall && !(sorted = insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
-        if (sorted) w->sort_backoff = 0;
+        int m;
+        n = keys_in_last_order(w, v, nbig, &m, &k);
+        /* past an eighth of the boxes apart, the scene is not coherent */
+        if (!k.tall && !(sorted = m <= n / 8 + 64 && insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
+        if (sorted) {
+            merge_in(w->key, n, w->tmp, m);
+            w->sort_backoff = 0;
+        } else {
+            memcpy(w->key + n, w->tmp, (size_t)m * sizeof *w->key);
+        }
+        n += m;
     } else if (keep) { /* the plan without the order: keys in slot order, sequential reads */
         w->sort_wait--;
         n = keys_by_slot(w, v, nbig, &k);
     }
     if (!keep || k.tall) {
         plan(v, f);
-        k.clamped = 0;
         k.tall = 0;
         n = keys_by_slot(w, v, nbig, &k);
         w->age = 0;
     }
     w->age++;
-    w->crowded = k.clamped > n / 16 + 16;
-    if (sorted)
-        for (i = 0; i < n; ++i) place(w, v, i, w->key[i]);
-    else
-        sort_and_place(w, v, n); /* the slot is payload: input order breaks ties */
+    if (sorted) {
+        const placing_ pl = placing_of(w, v);
+        for (i = 0; i < n; ++i) place(&pl, i, w->key[i]);
+    } else
+        sort_and_place(w, v, n, k); /* the slot is payload: input order breaks ties */
     w->rlo[n] = MK_SWEEP_END_;
+    w->crowded = crowded(w, n);
     return n;
 }
 
@@ -593,27 +703,38 @@ static int row_end(const struct mk_sweep *w, int i, int n)
     return i;
 }
 
-/* One sweep of the source's boxes, kept (KEPT_*) for the next sweep of the
- * same kind; the pairs go to c->report or stay in w->out. */
-static mk_status run(const sweep_ctx_ *c, int kind, int reuse)
+/* The pairs of the sorted boxes: each row alone and with the next one,
+ * then the big boxes. */
+static mk_status sweep_all(sweep_ctx_ *c, int n, int nbig)
 {
-    struct mk_sweep *w = c->w;
-    int n, nbig, s, e, u;
+    const struct mk_sweep *w = c->w;
+    int s, e, u;
     mk_status st;
-    n = sort_keys(w, c->v, reuse && w->kept == kind, &nbig);
-    w->n = n;
-    w->nbig = nbig;
-    w->src_n = c->v->n;
-    w->kept = KEPT_NONE;
-    w->nout = 0;
     for (s = 0, e = row_end(w, 0, n); s < n; s = e, e = u) {
         u = row_end(w, e, n);
         if ((st = sweep_row(c, s, e)) != MK_OK) return st;
         if (e < n && row_at(w, e) == row_at(w, s) + 1 && (st = sweep_rows(c, s, e, e, u)) != MK_OK) return st;
     }
-    if ((st = sweep_big(c, n, nbig)) != MK_OK) return st;
-    w->kept = kind;
-    return MK_OK;
+    return sweep_big(c, n, nbig);
+}
+
+/* One sweep of the source's boxes, kept (KEPT_*) for the next sweep of the
+ * same kind; the pairs go to c->report or stay in w->out. */
+static mk_status run(sweep_ctx_ *c, int kind, int reuse)
+{
+    struct mk_sweep *w = c->w;
+    int n, nbig;
+    mk_status st;
+    n = sort_keys(w, c->v, reuse && w->kept == kind, &nbig);
+    w->n = n;
+    w->nbig = nbig;
+    w->src_n = c->v->n;
+    c->at = w->out;
+    c->end = w->out + w->outcap;
+    st = sweep_all(c, n, nbig);
+    w->nout = (int)(c->at - w->out);
+    w->kept = st == MK_OK ? kind : KEPT_NONE;
+    return st;
 }
 
 static mk_status ensure(mk_bp *bp)
@@ -639,9 +760,15 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
     mk_status st;
     if ((st = ensure(bp)) != MK_OK) return st;
     v = proxies_of(bp);
-    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = report;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = report; c.statics = bp->statics > 0;
     /* The arrays describe the last sweep only if the last update was one. */
     return run(&c, KEPT_PROXIES, bp->swept);
+}
+
+const mk_bp_pair *mk_sweep_found_(const mk_bp *bp, int *count)
+{
+    *count = bp->sweep->nout;
+    return bp->sweep->out;
 }
 
 mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n, const mk_bp_pair **pairs, int *count)
@@ -657,7 +784,7 @@ mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n,
     v.base = (const char *)boxes;
     v.stride = stride;
     v.n = (uint32_t)n;
-    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = NULL;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = NULL; c.statics = 0;
     if ((st = run(&c, KEPT_BOXES, 1)) != MK_OK) return st;
     *pairs = c.w->out;
     *count = c.w->nout;
@@ -731,12 +858,13 @@ void mk_sweep_query_(const mk_bp *bp, mk_aabb q, mk_bp_query_fn fn, void *ctx)
     const frame_ *f = &w->f;
     uint32_t row = row_of(f, lo_of(&q, f->ay) - f->h), last = row_of(f, hi_of(&q, f->ay));
     uint32_t qx = quantise(f, hi_of(&q, f->ax));
+    const mk_aabb pq = permuted(f, &q);
     int i = row_start(w, 0, row), j;
     while (i < w->n && row_at(w, i) <= last) {
         row = row_at(w, i);
         for (; w->rlo[i] <= (row << 16 | qx); ++i) { /* the row's end or the sentinel stops it */
             uint32_t s = w->slot[i];
-            if (mk_bp_overlap_(&w->box[i], &q) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
+            if (mk_bp_overlap_(&w->box[i], &pq) && !fn(ctx, mk_bp_id_of_(bp, s), bp->user[s])) return;
         }
         i = row_start(w, i, row + 1);
     }

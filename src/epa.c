@@ -141,7 +141,11 @@ static int init_tetrahedron(epa_poly *P)
         int i;
         ok = fan_face(P, k, faces[k][0], faces[k][1], faces[k][2], mk_v3_sub(P->v[faces[k][0]].w, P->v[faces[k][2]].w),
                       mk_v3_sub(P->v[faces[k][1]].w, P->v[faces[k][2]].w)) && ok;
-        for (i = 0; i < 3; ++i) link(P, k, i, across[k][i][0], across[k][i][1]);
+        /* each face's own side of link(): the table holds both sides */
+        for (i = 0; i < 3; ++i) {
+            P->f[k].adj[i] = (short)across[k][i][0];
+            P->f[k].edge[i] = (unsigned char)across[k][i][1];
+        }
     }
     return ok;
 }

@@ -14,8 +14,8 @@
  * (linear scans; F <= MK_EPA_MAX_FACES), plus one support per iteration.
  * Measured (valgrind --tool=callgrind --toggle-collect=mk_distance_pose on
  * demos/bench_narrow --inproc --variant penetrating --backend minko.pose --n
- * 100 --reps 1): EPA costs 9.2k / 16.5k / 26.1k instructions per query on
- * hulls of 8 / 32 / 128 points and 12.7k on a 32-point hull against a box
+ * 100 --reps 1): EPA costs 9.1k / 16.3k / 25.9k instructions per query on
+ * hulls of 8 / 32 / 128 points and 12.5k on a 32-point hull against a box
  * (GJK before it 2.5k / 5.6k / 8.4k / 3.5k) over 6.5 / 9.2 / 12.9 / 8.4
  * iterations; an expansion costs ~900 of them, the two supports 100 (scans, 8
  * points) to ~450 (climbs, 128). One-off experiments (session 7, probes not
@@ -30,7 +30,7 @@
  * for visibility, the rim by edge matching; +1 % instructions, slower on 32
  * and 128 points); SAT as the certificate, even given the exact depth as its
  * pruning floor (49k instructions against 53k unseeded on hull_32; the whole
- * GJK + EPA query is 22.6k).
+ * GJK + EPA query is 22.5k).
  */
 #ifndef MINKO_EPA_H
 #define MINKO_EPA_H

@@ -417,6 +417,55 @@ START_TEST(boxes_errors)
 }
 END_TEST
 
+static int brute_count(const mk_aabb *b, int n)
+{
+    int i, j, c = 0;
+    for (i = 0; i < n; ++i)
+        for (j = i + 1; j < n; ++j) c += mk_aabb_overlap(b[i], b[j]);
+    return c;
+}
+
+/* Each box is checked as the sweep reads it, so a bad one is refused on
+ * every path: calls that keep the plan and start from the last call's
+ * order, new boxes past the last call's count, a NaN on the row axis (a
+ * box that would be filed as infinite), hi = -inf; and the call after a
+ * refused one is exact again. */
+START_TEST(boxes_bad_on_kept_plan)
+{
+    mk_bp *bp;
+    mk_bp_def d = mk_bp_default_def();
+    mk_aabb box[50];
+    const mk_bp_pair *p;
+    const mk_real inf = (mk_real)INFINITY;
+    static const int at[4] = {7, 45, 0, 49};
+    int i, np;
+    d.proxy_capacity = 50;
+    MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &bp), MK_OK);
+    for (i = 0; i < 50; ++i) { /* a 10 x 5 grid of unit boxes half a box apart */
+        mk_vec3 lo = mk_v3((mk_real)(0.5 * (i % 10)), (mk_real)(0.75 * (i / 10)), 0);
+        box[i] = mk_aabb_make(lo, mk_v3_add(lo, mk_v3(1, 1, 1)));
+    }
+    for (i = 0; i < 4; ++i) {
+        mk_aabb keep = box[at[i]];
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 40, &p, &np), MK_OK);
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 40, &p, &np), MK_OK);
+        ck_assert_int_eq(np, brute_count(box, 40));
+        if (i == 0) box[at[i]].lo.x = (mk_real)NAN;
+        if (i == 1) box[at[i]] = mk_aabb_make(mk_v3(0, 2, 0), mk_v3(1, 1, 1));
+        if (i == 2) box[at[i]].lo.y = box[at[i]].hi.y = (mk_real)NAN;
+        if (i == 3) box[at[i]].lo.z = box[at[i]].hi.z = -inf;
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 50, &p, &np), MK_ERR_BAD_AABB);
+        ck_assert(p == NULL && np == 0);
+        box[at[i]] = keep;
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 50, &p, &np), MK_OK);
+        ck_assert_int_eq(np, brute_count(box, 50));
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 50, &p, &np), MK_OK);
+        ck_assert_int_eq(np, brute_count(box, 50));
+    }
+    mk_bp_destroy(bp);
+}
+END_TEST
+
 int main(void)
 {
     Suite *su = suite_create("bp_sweep");
@@ -430,6 +479,7 @@ int main(void)
     tcase_add_test(tc, far_rows);
     tcase_add_test(tc, boxes_stride_and_order);
     tcase_add_test(tc, boxes_errors);
+    tcase_add_test(tc, boxes_bad_on_kept_plan);
     suite_add_tcase(su, tc);
     return mk_test_run(su);
 }

@@ -42,7 +42,7 @@ typedef struct entry {
     int ok;           /* enabled and not zero-sized */
     dBodyID body;
     unsigned long cat, col;
-    uint32_t seen;    /* sync epoch that last found the geom in the space */
+    uint32_t seen;    /* sync epoch that last found the geom in the space (marked only when some left) */
 } entry;
 
 /* ODE's interleaved AABB {minx, maxx, miny, maxy, minz, maxz}. */
@@ -352,21 +352,22 @@ static mk_status sync(space_state *st)
         /* order[] is a hint (records move when one is removed): checked */
         int k = (size_t)i < st->norder ? st->order[i] : -1;
         long slot = k >= 0 && k < st->n && st->entries[k].geom == g ? k : mk_ode_map_get(&st->index, g, NULL);
-        entry *e;
         if (slot < 0 && (s = add_entry(st, g, &slot)) != MK_OK) return s;
-        e = &st->entries[slot];
         read_aabb(st, (int)slot, g);
-        e->seen = st->epoch;
         st->order[i] = (int)slot;
     }
     st->norder = (size_t)n;
 #if !defined(MK_SINGLE)
     st->exact = 1; /* every box was just copied from ODE */
 #endif
-    /* Every enumerated geom is seen, so more records than geoms means some were not. */
-    for (i = 0; st->n > n && i < st->n;)
-        if (st->entries[i].seen != st->epoch) remove_entry(st, i);
-        else i++;
+    /* Every enumerated geom has a record, so more records than geoms means
+     * some geoms left: the ones order[] does not list. */
+    if (st->n > n) {
+        for (i = 0; i < n; i++) st->entries[st->order[i]].seen = st->epoch;
+        for (i = 0; i < st->n;)
+            if (st->entries[i].seen != st->epoch) remove_entry(st, i);
+            else i++;
+    }
     return MK_OK;
 }
 

@@ -56,18 +56,20 @@
  * pairs too; one without GJK or EPA returns MK_ERR_UNSUPPORTED for the pairs
  * that need them. Box and hull pairs whose bounding balls are farther apart
  * than the margin return before anything else. Complexity per call: O(1)
- * for the closed forms and for two boxes (15 axes, a 4-by-4 face clip in
- * the reference box's frame, the clipped points reduced there; a pair
- * apart along last frame's separating axis tests that one axis from the
- * world poses and stops; on demos/bench_contacts --quick's cases, under
+ * for the closed forms and for two boxes (one pass, src/box_box.c: 15
+ * axes, a 4-by-4 face clip in the reference face's 2D coordinates, the
+ * clipped points reduced there and written straight out; a pair apart
+ * along last frame's separating axis tests that one axis from the world
+ * poses and stops; on demos/bench_contacts --quick's cases, under
  * callgrind, steady state (--loops 5 less --loops 1), mk_collide_pose:
- * about 3.3k instructions warm for tilted stacked boxes (2.7k cold through
- * mk_collide, where the exact axis is often an edge pair: one point),
- * 2.6k for random overlaps, 0.3k for separated boxes whose bounding boxes
- * overlap; of the stacked ones, per call, about 0.7k SAT, 1.2k the clip
- * (only the sides some incident corner is outside of are passed), 0.3k
- * the reduction of up to 8 points to 4, 1.1k the checks, the pose, the
- * edge contacts and the move to world);
+ * about 2.9k instructions warm for tilted stacked boxes (2.3k cold through
+ * mk_collide, where the exact axis is often an edge pair: one point), 2.2k
+ * for random overlaps, 0.3k for separated boxes whose bounding boxes
+ * overlap; of the stacked ones, per call, about 0.14k the pose, 0.6k SAT,
+ * 0.3k the incident face, 0.6k its clip (only the sides some incident
+ * corner is outside of are passed), 0.3k the reduction of up to 8 points
+ * to 4, 0.4k writing the points, 0.45k the checks, options, depths and
+ * edge contacts);
  * for hulls SAT's O(F_A S_B + F_B S_A +
  * E_A E_B) (src/sat.h) plus O(n + m) clipping of faces with n and m (at most
  * 32) vertices; GJK/EPA pairs are bounded by their iteration caps.
