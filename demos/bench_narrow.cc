@@ -1073,6 +1073,37 @@ bool wanted_family(const Options &o, const char *name)
     return o.families.empty() || std::find(o.families.begin(), o.families.end(), name) != o.families.end();
 }
 
+// --variant takes a prefix ("sep" for separated, "touching" for both touching regressions).
+bool wanted_variant(const Options &o, const std::string &name)
+{
+    for (const std::string &v : o.variants)
+        if (name.compare(0, v.size(), v) == 0) return true;
+    return o.variants.empty();
+}
+
+// A --family, --backend or --variant that names nothing would silently run
+// nothing: refuse it (after the cases exist, so regression names are known).
+bool filters_ok(const Options &o, const std::vector<std::unique_ptr<Backend>> &backends, const mk_case_set &set)
+{
+    bool ok = true;
+    for (const std::string &f : o.families) {
+        bool known = f == "regression";
+        for (int k = 0; k < MK_FAM_COUNT; ++k) known = known || f == mk_family_name((mk_family)k);
+        if (!known) std::fprintf(stderr, "bench_narrow: no family '%s' (see --list)\n", f.c_str()), ok = false;
+    }
+    for (const std::string &b : o.backends) {
+        bool known = false;
+        for (const auto &x : backends) known = known || x->name == b;
+        if (!known) std::fprintf(stderr, "bench_narrow: no backend '%s' in this build (see --list)\n", b.c_str()), ok = false;
+    }
+    for (const std::string &v : o.variants) {
+        bool known = false;
+        for (int i = 0; i < set.count && !known; ++i) known = std::string(set.cases[i].variant).compare(0, v.size(), v) == 0;
+        if (!known) std::fprintf(stderr, "bench_narrow: no variant starting with '%s' in the chosen families\n", v.c_str()), ok = false;
+    }
+    return ok;
+}
+
 int build_cases(const Options &o, mk_case_set *set)
 {
     int n = o.n > 0 ? o.n : o.quick ? 10 : 200;
@@ -1131,7 +1162,7 @@ void usage(const char *argv0)
                  "          [--n N] [--reps N] [--list] [--selftest] [--inproc]\n"
                  "  --reps: timed rounds per group (default 20, --quick 3); each round times every backend once, in rotated order\n"
                  "  --quick: 10 + 10 cases per family, 3 rounds, summary only (--table adds every row)\n"
-                 "  --variant: separated, penetrating, or a regression's name (all by default)\n"
+                 "  --variant: separated, penetrating, or a regression's name, or a prefix of one (\"sep\"; all by default)\n"
                  "  --inproc: no child processes (for valgrind --tool=callgrind; a hanging backend hangs the run)\n",
                  argv0);
 }
@@ -1185,6 +1216,10 @@ int main(int argc, char **argv)
         std::fprintf(stderr, "bench_narrow: case generation failed\n");
         return 1;
     }
+    if (!filters_ok(o, backends, set)) {
+        mk_case_set_free(&set);
+        return 2;
+    }
     std::printf("bench_narrow (%s build): %d cases with exact references in %.1f s. Each backend answers in child\n"
                 "processes (a case that hangs > 2 s or crashes counts as a failure and is left out of the timing); then one\n"
                 "process per group warms every backend once, untimed, and times %d rounds (fewer, >= 3, once a group's\n"
@@ -1209,7 +1244,7 @@ int main(int argc, char **argv)
             ++hi;
         std::vector<const mk_case *> cs;
         for (int i = lo; i < hi; ++i) cs.push_back(&set.cases[i]);
-        if (!o.variants.empty() && std::find(o.variants.begin(), o.variants.end(), set.cases[lo].variant) == o.variants.end()) {
+        if (!wanted_variant(o, set.cases[lo].variant)) {
             lo = hi;
             continue;
         }

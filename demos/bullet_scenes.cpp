@@ -5,12 +5,13 @@
 // deterministic pair order; only the collision pipeline changes.
 //
 // Per scene and backend it reports: median ms per step (total, collision phase,
-// broadphase part), mean pairs / manifolds with >= 1 point / contact points per
-// step, the deepest penetration seen over the run (max_pen, mostly impacts) and
-// at the last step (pen_end, at rest where the scene settles), both judged by
-// one fixed referee for every backend (Bullet's GJK-EPA signed distance or the
-// exact oracle on the tight-AABB-overlapping pairs),
-// fallen bodies and drift, kinetic energy at the end, tunnelled bodies, and how
+// broadphase part) and the mean (total, collision phase; where bodies fall
+// asleep the medians only see the sleeping steps), mean pairs / manifolds
+// with >= 1 point / contact points per step, the deepest penetration seen
+// over the run (max_pen, mostly impacts) and at the last step (pen_end, at
+// rest where the scene settles), both judged by one fixed referee for every
+// backend (Bullet's GJK-EPA signed distance or the exact oracle on the
+// tight-AABB-overlapping pairs), fallen bodies and drift, kinetic energy at the end, tunnelled bodies, and how
 // far the end state is from the native run's. A body has fallen when it ends
 // lower than where drift measurement started by more than half its height (a
 // toppled tower block, a barrel rolled off the pile, a slab that squeezed its
@@ -945,9 +946,9 @@ const char *verdict(const Result::Spread &m, const Result::Spread &native)
 
 void print_header()
 {
-    std::printf("%-13s %-13s %-20s %5s %5s %9s %9s %9s %6s %8s %8s %8s %10s %10s %5s %10s %10s %4s %10s\n", "scene",
-                "variant", "backend", "bodies", "steps", "ms/step", "coll_ms", "bp_ms", "coll/n", "pairs", "manif",
-                "points", "max_pen", "pen_end", "fell", "drift", "ke_end", "tun", "div_native");
+    std::printf("%-13s %-13s %-20s %5s %5s %9s %9s %9s %9s %9s %6s %8s %8s %8s %10s %10s %5s %10s %10s %4s %10s\n",
+                "scene", "variant", "backend", "bodies", "steps", "ms/step", "coll_ms", "ms_mean", "coll_mean", "bp_ms",
+                "coll/n", "pairs", "manif", "points", "max_pen", "pen_end", "fell", "drift", "ke_end", "tun", "div_native");
 }
 
 void print_row(const SceneSpec &s, const Result &r, const Result &native)
@@ -957,9 +958,9 @@ void print_row(const SceneSpec &s, const Result &r, const Result &native)
     if (r.fallen >= 0) std::snprintf(fell, sizeof fell, "%.3g", r.fallen);
     if (r.divergence >= 0) std::snprintf(div, sizeof div, "%.3g", r.divergence);
     if (native.collision_ms > 0) std::snprintf(ratio, sizeof ratio, "%.2f", r.collision_ms / native.collision_ms);
-    std::printf("%-13s %-13s %-20s %5d %5d %9.3f %9.3f %9.3f %6s %8.1f %8.1f %8.1f %10.3g %10.3g %5s %10s %10.3g %4d %10s\n",
-                s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.bodies, r.steps, r.ms, r.collision_ms,
-                r.broadphase_ms, ratio, r.pairs, r.manifolds, r.points, r.max_penetration, r.end_penetration, fell, drift, r.ke_end,
+    std::printf("%-13s %-13s %-20s %5d %5d %9.3f %9.3f %9.3f %9.3f %9.3f %6s %8.1f %8.1f %8.1f %10.3g %10.3g %5s %10s %10.3g %4d %10s\n",
+                s.name.c_str(), s.variant.c_str(), r.backend.c_str(), r.bodies, r.steps, r.ms, r.collision_ms, r.ms_mean,
+                r.collision_ms_mean, r.broadphase_ms, ratio, r.pairs, r.manifolds, r.points, r.max_penetration, r.end_penetration, fell, drift, r.ke_end,
                 r.tunnelled, div);
     if (r.referee_failures) std::printf("    (referee: %d pairs it could not judge)\n", r.referee_failures);
     if (r.minko_pairs >= 0 && r.native_pairs > 0)
@@ -1070,7 +1071,8 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-    std::printf("bullet_scenes: Bullet %d (%s), %s run; times are medians per step in ms, counts are means per step\n",
+    std::printf("bullet_scenes: Bullet %d (%s), %s run; times in ms per step: ms/step, coll_ms, bp_ms and coll/n are "
+                "medians, ms_mean and coll_mean means (sleeping bodies make the medians bimodal); counts are means per step\n",
                 btGetVersion(), kBulletTag, quick ? "quick" : "full");
     print_header();
     for (const SceneEntry &e : kScenes) {
@@ -1091,6 +1093,10 @@ int main(int argc, char **argv)
                 std::find(only_backends.begin(), only_backends.end(), be.name) == only_backends.end())
                 continue;
             picked.push_back(b);
+        }
+        if (picked.empty()) {
+            std::fprintf(stderr, "bullet_scenes: no backend left for %s (--no-native with no other --backend)\n", e.id);
+            continue;
         }
         // per_backend[k][t]: backend picked[k] in trial t.
         std::vector<std::vector<Result>> per_backend(picked.size());

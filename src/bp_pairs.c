@@ -255,31 +255,6 @@ mk_status mk_pairs_full_add_(mk_bp *bp, uint32_t a, uint32_t b)
     return push_key(bp, key);
 }
 
-/* The set alone: the table is emptied (once, when a run of such updates
- * starts) and the keys collected are the new set, with no events. */
-void mk_pairs_set_begin_(mk_bp *bp)
-{
-    mk_pair_table *t = &bp->pairs;
-    if (t->count) {
-        t->count = 0;
-        memset(t->index, 0xff, (size_t)(t->index_mask + 1) * sizeof *t->index);
-    }
-    t->touched_count = 0;
-    t->full = 1;
-    t->full_count = 0;
-}
-
-mk_status mk_pairs_set_add_(mk_bp *bp, uint32_t a, uint32_t b)
-{
-    mk_pair_table *t = &bp->pairs;
-    if (!mk_bp_filter_keeps_(bp, a, b)) return MK_OK;
-    if (t->full_count < t->cap) { /* the common case, without a call */
-        t->scratch[t->full_count++] = mk_pair_key_(a, b);
-        return MK_OK;
-    }
-    return push_key(bp, mk_pair_key_(a, b));
-}
-
 /* Prefix sums of per-slot counts: c[s] becomes the first position of slot s. */
 static void bucket_starts(uint32_t *c, int slots)
 {
@@ -288,39 +263,60 @@ static void bucket_starts(uint32_t *c, int slots)
     for (s = 0; s < slots; ++s) { uint32_t v = c[s]; c[s] = sum; sum += v; }
 }
 
-/* The set, sorted, from n unsorted keys with a few pairs per slot: two
- * stable counting sorts (by the higher slot, then by the lower one, writing
- * the pairs themselves). Four sequential passes and two scatters, with no
- * branch on the data: cheaper than sorting each lower slot's bucket, whose
- * sizes vary from pair to pair and mislead the branch predictor. */
-static void set_from_keys(mk_bp *bp, const uint64_t *keys, uint64_t *tmp, int n)
+/* The set, sorted, from n unsorted pairs of slots (a < b) with a few pairs
+ * per slot: two stable counting sorts (by the higher slot into keys, then
+ * by the lower one, writing the pairs themselves). Four sequential passes
+ * and two scatters, with no branch on the data: cheaper than sorting each
+ * lower slot's bucket, whose sizes vary from pair to pair and mislead the
+ * branch predictor. */
+static void set_by_counting(mk_bp *bp, const mk_bp_pair *p, uint64_t *tmp, int n)
 {
     mk_pair_table *t = &bp->pairs;
     uint32_t *c = bp->bucket;
     int i, slots = bp->hi_slot;
     memset(c, 0, (size_t)slots * sizeof *c);
-    for (i = 0; i < n; ++i) c[(uint32_t)keys[i]]++;
+    for (i = 0; i < n; ++i) c[p[i].b]++;
     bucket_starts(c, slots);
-    for (i = 0; i < n; ++i) tmp[c[(uint32_t)keys[i]]++] = keys[i];
+    for (i = 0; i < n; ++i) tmp[c[p[i].b]++] = (uint64_t)p[i].a << 32 | p[i].b;
     memset(c, 0, (size_t)slots * sizeof *c);
     for (i = 0; i < n; ++i) c[tmp[i] >> 32]++;
     bucket_starts(c, slots);
     for (i = 0; i < n; ++i) t->set[c[tmp[i] >> 32]++] = pair_of(bp, tmp[i]);
 }
 
-void mk_pairs_set_end_(mk_bp *bp)
+/* The table is emptied (once, when a run of such updates starts); the pairs
+ * found are the new set, with no events. */
+mk_status mk_pairs_set_from_(mk_bp *bp, const mk_bp_pair *found, int n)
 {
     mk_pair_table *t = &bp->pairs;
-    int i, n = t->full_count;
+    int i, m;
+    mk_status st;
+    while (t->cap < n) {
+        if (bp->def.fixed_capacity || t->cap > INT32_MAX / 2) return MK_ERR_CAPACITY;
+        if ((st = table_resize(bp, t->cap * 2)) != MK_OK) return st;
+    }
+    if (t->count) {
+        t->count = 0;
+        memset(t->index, 0xff, (size_t)(t->index_mask + 1) * sizeof *t->index);
+    }
+    t->touched_count = 0;
+    if (bp->def.filter_mode != MK_BP_FILTER_NONE || bp->def.filter) { /* the kept ones, once each */
+        for (i = m = 0; i < n; ++i)
+            if (mk_bp_filter_pass_(bp, found[i].a, found[i].b)) t->set_next[m++] = found[i];
+        found = t->set_next;
+        n = m;
+    }
     if (n >= bp->hi_slot / 2) {
-        set_from_keys(bp, t->scratch, t->scratch2, n);
+        set_by_counting(bp, found, t->scratch, n);
     } else {
+        for (i = 0; i < n; ++i) t->scratch[i] = (uint64_t)found[i].a << 32 | found[i].b;
         mk_sort_u64_(t->scratch, t->scratch2, n);
         for (i = 0; i < n; ++i) t->set[i] = pair_of(bp, t->scratch[i]);
     }
     t->set_count = n;
     t->added_count = t->removed_count = 0;
     t->full = 2; /* mk_pairs_finish_ has nothing to add */
+    return MK_OK;
 }
 
 /* keys[0, n) sorted: the new set. Events are its difference from the old set. */

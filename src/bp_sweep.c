@@ -1,8 +1,9 @@
 /* bp_sweep.c: every overlapping pair from scratch, with no pairs kept between
  * calls: a sort and sweep in rows. It serves a pairs_only SAP's busy updates
  * (the proxies' boxes, statics among them, pairs reported to the pair
- * table) and mk_bp_sweep_boxes (a caller's array of boxes, the pairs handed
- * out as found, with no proxies, pair table or per-pair call at all).
+ * table, or kept as found for the set alone) and mk_bp_sweep_boxes (a
+ * caller's array of boxes, the pairs handed out as found, with no proxies,
+ * pair table or per-pair call at all).
  *
  * Why rows: a plain sort and sweep on one axis tests every pair that
  * overlaps on that axis, and on a scene spread over a plane (ODE's exploded
@@ -25,11 +26,13 @@
  * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
  * quantisation, rows; made with headroom) and start from the last sweep's
  * order, so a coherent scene needs an insertion sort, O(n), instead of the
- * radix sort; a plan is remade when it is old, when boxes crowd the ends
- * of its ranges, or when a box is taller than its rows (the one thing that
- * would make it wrong).
+ * radix sort (boxes that changed rows are sorted apart and merged in); a
+ * plan is remade when it is old, when boxes crowd the ends of its ranges,
+ * or when a box is taller than its rows (the one thing that would make it
+ * wrong).
  *
- * Cost: O(n) keys, one insertion sort bounded to 4 moves per box or one
+ * Cost: O(n) keys, one insertion sort bounded to 4 moves per box (plus a
+ * radix sort of the boxes that changed rows, at most about n / 8) or one
  * radix sort of n keys (counted as they are made, two or three scatter
  * passes, the last one writing the sweep's arrays), and for each box the
  * boxes of its three rows that overlap it on the sweep axis. */
@@ -286,8 +289,9 @@ typedef struct sweep_ctx_ {
     mk_bp *bp;
     const src_ *v;
     struct mk_sweep *w;
-    report_fn report;     /* proxies: each pair goes there; NULL: pairs go to w->out, */
+    report_fn report;     /* each pair goes there; NULL: pairs go to w->out, */
     mk_bp_pair *at, *end; /* at `at`, w->out's end at `end` (pointers: the pairs' stores cannot alias them) */
+    int statics;          /* proxies, statics among them: static-static pairs are left out */
 } sweep_ctx_;
 
 /* w->out is full: double it, unless the caller fixed the capacity. */
@@ -307,12 +311,13 @@ static mk_status grow_out(sweep_ctx_ *c)
     return MK_OK;
 }
 
-/* An overlapping pair: to the proxies' report (no static-static pair), or
- * into w->out. */
+/* An overlapping pair (no static-static pair): to the report, or into
+ * w->out, with no call (a pairs_only SAP's set comes from there). */
 static inline mk_status emit(sweep_ctx_ *c, uint32_t a, uint32_t b)
 {
     mk_status st;
-    if (c->report) return mk_bp_both_static_(c->bp, a, b) ? MK_OK : c->report(c->bp, a, b);
+    if (c->statics && mk_bp_both_static_(c->bp, a, b)) return MK_OK;
+    if (c->report) return c->report(c->bp, a, b);
     if (c->at == c->end && (st = grow_out(c)) != MK_OK) return st;
     c->at->a = a < b ? a : b;
     c->at->b = a < b ? b : a;
@@ -467,14 +472,18 @@ static int keys_by_slot(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k
     return n;
 }
 
-/* The same keys in the order of the last sweep (key[0, w->n) and the big
+/* The same keys in the order of the last sweep (slot[0, w->n) and the big
  * list of the last sweep): with a coherent scene and the same plan they
- * come out nearly sorted. The last sweep's boxes are the ones in the source
- * now but for those added since: proxies created since the last update
- * (flag NEW in the dirty list), or the caller's boxes past the last count;
- * the new ones go last, after any that stopped being big. tmp holds them
- * meanwhile. */
-static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, keying_ *k)
+ * come out nearly sorted, into key[0, returned count). The last sweep's
+ * boxes are the ones in the source now but for those added since: proxies
+ * created since the last update (flag NEW in the dirty list), or the
+ * caller's boxes past the last count. Those, any that stopped being big,
+ * and the boxes that changed rows go to tmp[0, *extra) instead: a box that
+ * changed rows is a row's length away from its place in the order (boxes
+ * lined up in a corridor cross the row line every frame), so sorting it
+ * apart and merging it in is cheaper than moving it there one place at a
+ * time. */
+static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, int *extra_out, keying_ *k)
 {
     mk_bp *bp = v->bp;
     int n = 0, extra = 0, i, nb = 0;
@@ -488,12 +497,29 @@ static int keys_in_last_order(struct mk_sweep *w, const src_ *v, int *nbig, keyi
         for (s = w->src_n; s < v->n; ++s) file_box(w, v, s, w->tmp, &extra, &nb, k);
     }
     for (i = 0; i < w->n; ++i) {
+        const mk_aabb *b;
+        uint64_t key;
         s = w->slot[i];
-        if (src_in(v, s)) file_box(w, v, s, w->key, &n, &nb, k);
+        if (!src_in(v, s)) continue;
+        b = src_box(v, s);
+        if (is_big(&w->f, b)) { w->big[nb++] = s; continue; }
+        key = key_of(&w->f, b, s, k);
+        if ((uint32_t)(key >> 40) != w->rlo[i] >> 16) w->tmp[extra++] = key; /* another row */
+        else w->key[n++] = key;
     }
-    for (i = 0; i < extra; ++i) w->key[n++] = w->tmp[i];
     *nbig = nb;
+    *extra_out = extra;
     return n;
+}
+
+/* key[0, n) sorted, tmp[0, m) not, n + m keys of room in key: all of them
+ * sorted into key. The radix sort of tmp borrows key[n, n + m) as scratch;
+ * the merge runs from the back, so it never overwrites a key not yet read. */
+static void merge_in(uint64_t *key, int n, uint64_t *tmp, int m)
+{
+    int i = n - 1, j = m - 1, o = n + m - 1;
+    mk_sort_u64_by_(tmp, key + n, m, 3);
+    while (j >= 0) key[o--] = i >= 0 && key[i] > tmp[j] ? key[i--] : tmp[j--];
 }
 
 /* Insertion sort that gives up once it has moved keys `budget` places
@@ -632,9 +658,17 @@ static int sort_keys(struct mk_sweep *w, const src_ *v, int reuse, int *nbig)
     keying_ k = {0, 0, 0, ~(uint64_t)0};
     int n = 0, i, sorted = 0, keep = reuse && !w->crowded && w->age < MK_SWEEP_PLAN_AGE_;
     if (keep && w->sort_wait == 0) {
-        n = keys_in_last_order(w, v, nbig, &k);
-        if (!k.tall && !(sorted = insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
-        if (sorted) w->sort_backoff = 0;
+        int m;
+        n = keys_in_last_order(w, v, nbig, &m, &k);
+        /* past an eighth of the boxes apart, the scene is not coherent */
+        if (!k.tall && !(sorted = m <= n / 8 + 64 && insertion_sort(w->key, n, 4L * n + 64))) insertion_gave_up(w);
+        if (sorted) {
+            merge_in(w->key, n, w->tmp, m);
+            w->sort_backoff = 0;
+        } else {
+            memcpy(w->key + n, w->tmp, (size_t)m * sizeof *w->key);
+        }
+        n += m;
     } else if (keep) { /* the plan without the order: keys in slot order, sequential reads */
         w->sort_wait--;
         n = keys_by_slot(w, v, nbig, &k);
@@ -726,9 +760,15 @@ mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, 
     mk_status st;
     if ((st = ensure(bp)) != MK_OK) return st;
     v = proxies_of(bp);
-    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = report;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = report; c.statics = bp->statics > 0;
     /* The arrays describe the last sweep only if the last update was one. */
     return run(&c, KEPT_PROXIES, bp->swept);
+}
+
+const mk_bp_pair *mk_sweep_found_(const mk_bp *bp, int *count)
+{
+    *count = bp->sweep->nout;
+    return bp->sweep->out;
 }
 
 mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n, const mk_bp_pair **pairs, int *count)
@@ -744,7 +784,7 @@ mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n,
     v.base = (const char *)boxes;
     v.stride = stride;
     v.n = (uint32_t)n;
-    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = NULL;
+    c.bp = bp; c.v = &v; c.w = bp->sweep; c.report = NULL; c.statics = 0;
     if ((st = run(&c, KEPT_BOXES, 1)) != MK_OK) return st;
     *pairs = c.w->out;
     *count = c.w->nout;

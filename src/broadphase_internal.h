@@ -131,11 +131,10 @@ void mk_pairs_drop_flagged_(mk_bp *bp, uint8_t flags);
 void mk_pairs_full_begin_(mk_bp *bp);
 mk_status mk_pairs_full_add_(mk_bp *bp, uint32_t a, uint32_t b);
 void mk_pairs_full_end_(mk_bp *bp);
-/* The set alone, without events or entries (pairs_only's stateless updates):
- * begin, add every overlapping pair once (the filter runs on each), end. */
-void mk_pairs_set_begin_(mk_bp *bp);
-mk_status mk_pairs_set_add_(mk_bp *bp, uint32_t a, uint32_t b);
-void mk_pairs_set_end_(mk_bp *bp);
+/* The set alone, without events or entries (pairs_only's stateless updates),
+ * from every overlapping pair found once (slots, a < b; the filter runs on
+ * each). MK_ERR_CAPACITY / OUT_OF_MEMORY leave the table as it was. */
+mk_status mk_pairs_set_from_(mk_bp *bp, const mk_bp_pair *found, int n);
 /* Empties the table but keeps the set the caller last saw: the next finish
  * diffs the live entries against it as a whole (the grid's rebuild). */
 void mk_pairs_forget_(mk_bp *bp);
@@ -154,11 +153,14 @@ void mk_sort_u64_by_(uint64_t *keys, uint64_t *tmp, int n, int from_byte);
 
 /* ---- stateless sort and sweep (bp_sweep.c) ---- */
 /* Reports every overlapping pair of live proxies (no static-static pair)
- * once, in no set order, from the boxes in box[]; allocates its scratch on
- * first use. O(n) + one sort + the boxes met in the sweep; right after an
+ * once, in no set order, from the boxes in box[] (report NULL: the pairs
+ * of slots, a < b, stay in the sweep's array, mk_sweep_found_, grown by
+ * doubling); allocates its scratch on first use. O(n) + one sort + the boxes met in the sweep; right after an
  * update answered by a sweep (bp->swept), the sort starts from that
  * sweep's order (an insertion sort, O(n) on a coherent scene). */
 mk_status mk_sweep_pairs_(mk_bp *bp, mk_status (*report)(mk_bp *bp, uint32_t a, uint32_t b));
+/* The pairs the last mk_sweep_pairs_ without a report found. */
+const mk_bp_pair *mk_sweep_found_(const mk_bp *bp, int *count);
 /* The same over a caller's boxes (mk_bp_sweep_boxes, checked there): the
  * pairs of indices, a < b, in the sweep's scratch (grown by doubling). */
 mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n, const mk_bp_pair **pairs, int *count);

@@ -220,10 +220,12 @@ static mk_status rebuild(mk_bp *bp)
  * goes back to insertion sorts starts with a rebuild. */
 static mk_status sweep_set(mk_bp *bp)
 {
+    const mk_bp_pair *found;
+    int n;
     mk_status st;
-    mk_pairs_set_begin_(bp);
-    if ((st = mk_sweep_pairs_(bp, mk_pairs_set_add_)) != MK_OK) { bp->pairs.full = 0; return st; }
-    mk_pairs_set_end_(bp);
+    if ((st = mk_sweep_pairs_(bp, NULL)) != MK_OK) return st;
+    found = mk_sweep_found_(bp, &n);
+    if ((st = mk_pairs_set_from_(bp, found, n)) != MK_OK) return st;
     bp->rebuild = 1;
     bp->sweeps++;
     return MK_OK;

@@ -25,7 +25,9 @@
  * only when they overflow (never in a steady state; a fixed-size mode refuses
  * with MK_ERR_CAPACITY instead), and AUTO allocates the structure it switches
  * to (stats.switches counts that) and, for a pairs_only caller, the sweep's
- * scratch (about 80 B per proxy) with which it measures crowding. An update that fails leaves the broadphase
+ * scratch (about 80 B per proxy, and 8 B per pair its stateless updates
+ * find, grown by doubling like the pair set) with which it measures
+ * crowding. An update that fails leaves the broadphase
  * valid: the next successful update rebuilds what was missed. Queries (region,
  * ray, stats) never allocate and never change the broadphase, so several
  * threads may query at once; no other call is thread-safe.
@@ -46,7 +48,8 @@
  *                spread is swept, the next one cut into rows as tall as the
  *                tallest box, one sort of n keys (radix, or insertion from
  *                the last sweep's order when sweeps follow each and the
- *                scene is coherent: O(n)), and each box meets
+ *                scene is coherent: O(n), the boxes that changed rows
+ *                sorted apart and merged in), and each box meets
  *                the boxes of its own and the next row that overlap it on
  *                the swept axis: O(n + those meetings + p) (the pairs are
  *                bucketed by their lower slot to sort them); a box
