@@ -483,7 +483,6 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
 
 /* ---- the whole pair ---------------------------------------------------------- */
 
-static mk_real min3(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
 
 /* An edge pair whose cross product is a face normal (an edge of B lying
  * parallel to a face of A, as in every box resting flat on another) is that
@@ -533,8 +532,7 @@ static void none(mk_manifold *out, mk_vec3 n)
 #ifndef MK_WITHOUT_GJK
 static int realised(mk_real deepest, mk_real depth, const mk_pair *p)
 {
-    mk_real size_a = p->a->radius + mk_v3_max_abs(p->a->u.half_extents), size_b = p->b->radius + mk_v3_max_abs(p->b->u.half_extents);
-    return deepest >= depth - 256 * MK_REAL_EPSILON * (mk_v3_max_abs(p->t) + size_a + size_b);
+    return deepest >= depth - mk_mf_realise_tol(p);
 }
 #endif
 
@@ -610,7 +608,7 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
     opt.stop_above = margin + ra + rb;
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
     opt.prefer_rel = MK_MF_PREFER_REL;
-    opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0 : MK_MF_PREFER_ABS * mk_min(min3(ha), min3(hb));
+    opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0 : MK_MF_PREFER_ABS * mk_min(mk_v3_min_comp(ha), mk_v3_min_comp(hb));
     opt.hold_face = !cache || cache->mode == MK_MANIFOLD_STABLE_IDS;
     sat_boxes(ha, hb, &p.r, p.t, &opt, &sat);
     if (sat.kind == MK_SAT_EDGES) face_axis(&p, &sat);

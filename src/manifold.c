@@ -226,7 +226,6 @@ static void face_axis(const mk_hull *ha, const mk_hull *hb, const mk_pair *p, mk
     }
 }
 
-static mk_real min3(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
 
 /* The reference face `face` of polytope s (box or hull), in its own frame. */
 static void polytope_face(const mk_shape *s, int face, mk_feat *f)
@@ -242,14 +241,9 @@ static void polytope_face(const mk_shape *s, int face, mk_feat *f)
  * separate by less than the edges are apart, and the faces' clip is empty),
  * the exact core distance comes from GJK instead. */
 #ifndef MK_WITHOUT_GJK
-static mk_real polytope_size(const mk_shape *s)
-{
-    return s->radius + (s->type == MK_SHAPE_BOX ? mk_v3_max_abs(s->u.half_extents) : s->u.hull->outer_radius);
-}
-
 static int realised(const mk_mf *m, mk_real depth, const mk_pair *p)
 {
-    mk_real tol = 256 * MK_REAL_EPSILON * (mk_v3_max_abs(p->t) + polytope_size(p->a) + polytope_size(p->b));
+    mk_real tol = mk_mf_realise_tol(p);
     int i;
     for (i = 0; i < m->count; ++i)
         if (m->p[i].depth >= depth - tol) return 1;
@@ -308,8 +302,8 @@ static mk_status polytopes(const mk_pair *p, mk_mf *m, mk_manifold_cache *cache)
     mk_box_hull va, vb;
     const mk_hull *ha = a->u.hull, *hb = b->u.hull;
     opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0
-                                               : MK_MF_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? min3(a->u.half_extents) : ha->inner_radius,
-                                                                            b->type == MK_SHAPE_BOX ? min3(b->u.half_extents) : hb->inner_radius);
+                                               : MK_MF_PREFER_ABS * mk_min(a->type == MK_SHAPE_BOX ? mk_v3_min_comp(a->u.half_extents) : ha->inner_radius,
+                                                                            b->type == MK_SHAPE_BOX ? mk_v3_min_comp(b->u.half_extents) : hb->inner_radius);
     /* A box meets a hull as its mk_box_hull view: O(1), no allocation,
      * the same indices as the 15-axis form. */
     if (a->type == MK_SHAPE_BOX) {

@@ -119,6 +119,22 @@ mk_feature mk_box_edge(int corner_i, int corner_j);
 
 /* Corner `bits` (zyx, set = +extent) of the box of half-extents h, and
  * the two ends of box edge `id` (minko/manifold.h numbering). */
+/* The smallest component of v (a box's thinnest half extent). */
+static inline mk_real mk_v3_min_comp(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
+
+/* How far below the SAT depth a built point may fall and still realise it
+ * (box_box.c, manifold.c): rounding of the pose and the two shapes' sizes.
+ * A polytope's size is its rounding plus its farthest extent. */
+static inline mk_real mk_mf_polytope_size(const mk_shape *s)
+{
+    return s->radius + (s->type == MK_SHAPE_BOX ? mk_v3_max_abs(s->u.half_extents) : s->u.hull->outer_radius);
+}
+
+static inline mk_real mk_mf_realise_tol(const mk_pair *p)
+{
+    return 256 * MK_REAL_EPSILON * (mk_v3_max_abs(p->t) + mk_mf_polytope_size(p->a) + mk_mf_polytope_size(p->b));
+}
+
 static inline mk_vec3 mk_box_corner(mk_vec3 h, int bits)
 {
     return mk_v3(bits & 1 ? h.x : -h.x, bits & 2 ? h.y : -h.y, bits & 4 ? h.z : -h.z);
