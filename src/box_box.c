@@ -356,38 +356,27 @@ static void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, mk_real
 
 MK_ALWAYS_INLINE const mk_vec3 *column(const mk_mat3 *m, int k) { return k == 0 ? &m->c0 : k == 1 ? &m->c1 : &m->c2; }
 
-/* Edge pair hint (half-edges ea of A, eb of B) from world poses: the two
- * rows of R and entries of t that box_edge_axis reads (row i and t_i only
- * ever multiply L_i = 0: zeros), as mk_pair_of_poses_ forms them. */
-static int edge_hint_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 dp, int ea, int eb,
-                           mk_real stop, mk_sat_result *out)
+/* Separation along edge pair (e_i of A, R_j of B) straight from the world
+ * poses: the two rows of R and entries of t that box_edge_axis reads (row
+ * i and t_i only ever multiply L_i = 0: zeros), as mk_pair_of_poses_ forms
+ * them; -MK_REAL_MAX when the edges are parallel. */
+static mk_real edge_sep_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 dp, int i, int j)
 {
     mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
-    int i = mk_box_hull_edge_id(ea) / 4, j = mk_box_hull_edge_id(eb) / 4, n, k;
+    int n, k;
     box_edges best;
     for (n = 1; n < 3; ++n) {
         int row = (i + n) % 3;
-        const mk_vec3 *e = column(ra, row);
-        for (k = 0; k < 3; ++k) r[row][k] = mk_v3_dot(*e, *column(rb, k));
+        mk_vec3 e = *column(ra, row);
+        for (k = 0; k < 3; ++k) r[row][k] = mk_v3_dot(e, *column(rb, k));
         ar[row][j] = mk_fabs_(r[row][j]);
-        d[row] = mk_v3_dot(*e, dp);
+        d[row] = mk_v3_dot(e, dp);
     }
-    r[i][0] = r[i][1] = r[i][2] = d[i] = 0;
     a[0] = ha->x, a[1] = ha->y, a[2] = ha->z;
     b[0] = hb->x, b[1] = hb->y, b[2] = hb->z;
     best.sep = -MK_REAL_MAX;
     box_edge_axis(r, ar, a, b, d, i, j, MK_REAL_MAX, &best);
-    if (!(best.sep > stop)) return 0;
-    edge_result(r, d, i, j, best.sep, out);
-    out->best = best.sep;
-    out->complete = 0;
-    return 1;
-}
-
-int mk_sat_box_box_edge_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_pose *xa, const mk_pose *xb, int ia, int ib, mk_real stop,
-                              mk_sat_result *out)
-{
-    return ia >= 0 && ia < 24 && ib >= 0 && ib < 24 && edge_hint_apart(ha, hb, &xa->r, &xb->r, mk_v3_sub(xb->p, xa->p), ia, ib, stop, out);
+    return best.sep;
 }
 
 /* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
@@ -554,29 +543,28 @@ static int stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, c
     mk_sat_kind kind = (mk_sat_kind)(cache->axis - MK_MF_APART_HINT);
     mk_real rr = a->radius + b->radius;
     if (kind == MK_SAT_EDGES) {
-        mk_sat_result sat;
-        if (mk_sat_box_box_edge_apart(&a->u.half_extents, &b->u.half_extents, xa, xb, cache->reference, (int)cache->face - 1, margin + rr,
-                                      &sat) &&
-            sat.best - rr > margin) {
-            cache->reference = sat.a;
-            cache->face = (mk_feature)(sat.b + 1);
-            return 1;
+        /* The hint's half-edges name their edges' directions, all the axis
+         * depends on: kept as they are while the pair stays apart. */
+        int ea = cache->reference, eb = (int)cache->face - 1;
+        if (ea >= 0 && ea < 24 && eb >= 0 && eb < 24) {
+            mk_real sep = edge_sep_apart(&a->u.half_extents, &b->u.half_extents, &xa->r, &xb->r, mk_v3_sub(xb->p, xa->p),
+                                         mk_box_hull_edge_id(ea) / 4, mk_box_hull_edge_id(eb) / 4);
+            if (sep > margin + rr && sep - rr > margin) return 1;
         }
     } else if (kind == MK_SAT_FACE_A || kind == MK_SAT_FACE_B) {
-        int of_a = kind == MK_SAT_FACE_A, face = of_a ? cache->reference : (int)cache->face - 1, k = face / 2;
-        const mk_mat3 *own = of_a ? &xa->r : &xb->r, *other = of_a ? &xb->r : &xa->r;
-        const mk_vec3 *h = of_a ? &a->u.half_extents : &b->u.half_extents, *g = of_a ? &b->u.half_extents : &a->u.half_extents;
+        /* The axis is the face's box axis k; which of its two faces (the
+         * sign) does not change the separation, so the hint is kept as is. */
+        int of_a = kind == MK_SAT_FACE_A, face = of_a ? cache->reference : (int)cache->face - 1;
         if (face >= 0 && face < 6) {
-            const mk_vec3 *e = k == 0 ? &own->c0 : k == 1 ? &own->c1 : &own->c2;
-            mk_real d = mk_v3_dot(*e, mk_v3_sub(xb->p, xa->p));
-            mk_real sep = mk_fabs_(d) - (k == 0 ? h->x : k == 1 ? h->y : h->z) -
-                          (mk_fabs_(mk_v3_dot(*e, other->c0)) * g->x + mk_fabs_(mk_v3_dot(*e, other->c1)) * g->y +
-                           mk_fabs_(mk_v3_dot(*e, other->c2)) * g->z);
-            if (sep > margin + rr && sep - rr > margin) {
-                cache->reference = of_a ? 2 * k + (d >= 0) : -1;
-                cache->face = (mk_feature)(of_a ? 0 : 2 * k + (d < 0) + 1);
-                return 1;
-            }
+            const mk_pose *own = of_a ? xa : xb, *other = of_a ? xb : xa;
+            const mk_vec3 *h = of_a ? &a->u.half_extents : &b->u.half_extents, *g = of_a ? &b->u.half_extents : &a->u.half_extents;
+            int k = face >> 1;
+            mk_vec3 e = *column(&own->r, k);
+            mk_real hk = k == 0 ? h->x : k == 1 ? h->y : h->z;
+            mk_real sep = mk_fabs_(mk_v3_dot(e, mk_v3_sub(xb->p, xa->p))) - hk -
+                          (mk_fabs_(mk_v3_dot(e, other->r.c0)) * g->x + mk_fabs_(mk_v3_dot(e, other->r.c1)) * g->y +
+                           mk_fabs_(mk_v3_dot(e, other->r.c2)) * g->z);
+            if (sep > margin + rr && sep - rr > margin) return 1;
         }
     }
     cache->axis = cache->reference = 0;
@@ -586,7 +574,7 @@ static int stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, c
 
 /* Everything after the hint (out of line: the pair that stays apart
  * needs none of this frame). */
-static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
                                mk_manifold *out)
 {
     mk_real ra = a->radius, rb = b->radius, deepest = -MK_REAL_MAX;
@@ -595,15 +583,6 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
     mk_sat_result sat;
     mk_pair p;
     int i, count;
-    {
-        /* Bounding balls about the centres farther apart than the margin. */
-        mk_real reach = ra + mk_v3_len(ha) + rb + mk_v3_len(hb) + margin;
-        if (mk_v3_len2(mk_v3_sub(xb->p, xa->p)) > reach * reach) {
-            if (cache) cache->axis = MK_SAT_NONE;
-            none(out, mk_v3(0, 0, 1));
-            return 1;
-        }
-    }
     p = mk_pair_of_poses_(a, xa, b, xb);
     opt.stop_above = margin + ra + rb;
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
@@ -619,7 +598,7 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
             cache->face = (mk_feature)(sat.b + 1);
         }
         none(out, xa->r.c2);
-        return 1;
+        return MK_OK;
     }
     if (cache) cache->axis = (int)sat.kind;
     n = sat.normal;
@@ -653,31 +632,46 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
         }
     }
 #ifndef MK_WITHOUT_GJK
-    if (sat.separation > 0 && !realised(deepest, ra + rb - sat.separation, &p)) return 0;
+    if (sat.separation > 0 && !realised(deepest, ra + rb - sat.separation, &p)) return mk_collide_gjk_(a, xa, b, xb, margin, cache, out);
 #else
     (void)deepest;
 #endif
     out->normal = nw;
     out->count = count;
+    return MK_OK;
+}
+
+/* Bounding balls about the centres farther apart than the margin: no
+ * contact, and nothing carried to the next frame. */
+MK_ALWAYS_INLINE int balls_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+                                 mk_manifold *out)
+{
+    mk_real reach = a->radius + mk_v3_len(a->u.half_extents) + b->radius + mk_v3_len(b->u.half_extents) + margin;
+    if (!(mk_v3_len2(mk_v3_sub(xb->p, xa->p)) > reach * reach)) return 0;
+    if (cache) cache->axis = MK_SAT_NONE;
+    none(out, mk_v3(0, 0, 1));
     return 1;
 }
 
 /* A pair that was apart last frame: its axis, else the whole pass (both
  * ends tail calls, so neither path keeps the other's frame). */
-static MK_NOINLINE int hinted(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
-                              mk_manifold *out)
+static MK_NOINLINE mk_status hinted(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                                    mk_manifold_cache *cache, mk_manifold *out)
 {
     if (stay_apart(a, xa, b, xb, margin, cache)) {
         none(out, mk_v3(0, 0, 1));
-        return 1;
+        return MK_OK;
     }
+    if (balls_apart(a, xa, b, xb, margin, cache, out)) return MK_OK;
     return collide(a, xa, b, xb, margin, cache, out);
 }
 
-int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
-                       mk_manifold *out)
+mk_status mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                             mk_manifold_cache *cache, mk_manifold *out)
 {
-    return cache && cache->axis > MK_MF_APART_HINT ? hinted(a, xa, b, xb, margin, cache, out) : collide(a, xa, b, xb, margin, cache, out);
+    if (cache && cache->axis > MK_MF_APART_HINT) return hinted(a, xa, b, xb, margin, cache, out);
+    if (balls_apart(a, xa, b, xb, margin, cache, out)) return MK_OK;
+    return collide(a, xa, b, xb, margin, cache, out);
 }
 
 #endif

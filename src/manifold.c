@@ -463,14 +463,32 @@ static MK_NOINLINE mk_status collide_checked(const mk_shape *a, const mk_pose *x
     return MK_OK;
 }
 
+/* The checks of mk_collide_pose below for two boxes, type known: both
+ * shapes, both poses, the margin, the cache mode; 1 when all pass. */
+MK_ALWAYS_INLINE int boxes_ok(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                              const mk_manifold_cache *cache)
+{
+    return mk_shape_ok_typed_(a, MK_SHAPE_BOX) && mk_shape_ok_typed_(b, MK_SHAPE_BOX) && mk_pose_ok_(xa) && mk_pose_ok_(xb) && margin >= 0 &&
+           margin <= MK_REAL_MAX && (!cache || (unsigned)cache->mode <= (unsigned)MK_MANIFOLD_BEST_FACE);
+}
+
+mk_status mk_collide_gjk_(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                          mk_manifold_cache *cache, mk_manifold *out)
+{
+    return collide_checked(a, xa, b, xb, margin, cache, out, generic);
+}
+
 mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
                           mk_manifold_cache *cache, mk_manifold *out)
 {
     mk_status st;
     if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
-    /* Two boxes (the common pair) are checked with their type known. */
-    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX ? !mk_shape_ok_typed_(a, MK_SHAPE_BOX) || !mk_shape_ok_typed_(b, MK_SHAPE_BOX)
-                                                          : !mk_shape_ok_typed_(a, a->type) || !mk_shape_ok_typed_(b, b->type)) {
+#ifndef MK_WITHOUT_SAT
+    /* Two boxes in one pass (box_box.c). */
+    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX && boxes_ok(a, xa, b, xb, margin, cache))
+        return mk_box_box_collide(a, xa, b, xb, margin, cache, out);
+#endif
+    if (!mk_shape_ok_typed_(a, a->type) || !mk_shape_ok_typed_(b, b->type)) {
         if ((st = mk_shape_validate(a)) != MK_OK) return st;
         return mk_shape_validate(b);
     }
@@ -478,12 +496,6 @@ mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *
     if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
     if (margin < 0) return MK_ERR_BAD_ARGUMENT;
     if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
-#ifndef MK_WITHOUT_SAT
-    /* Two boxes in one pass (box_box.c); GJK when rounded cores are apart
-     * and SAT's points fall short of their distance. */
-    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX)
-        return mk_box_box_collide(a, xa, b, xb, margin, cache, out) ? MK_OK : collide_checked(a, xa, b, xb, margin, cache, out, generic);
-#endif
     return collide_checked(a, xa, b, xb, margin, cache, out, NULL);
 }
 

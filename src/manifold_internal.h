@@ -225,11 +225,15 @@ int mk_box_box_clip(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_r
  * frame's separating axis, the bounding balls, the relative pose, the 15
  * SAT axes with the face/edge hysteresis, then for a face axis
  * mk_box_box_clip reduced to four, for an edge pair the edges' closest
- * points; the result written straight into *out, the cache updated.
- * Returns 1 when done, 0 when rounded cores are apart and SAT's points do
- * not realise their distance: the caller then asks GJK (*out is then
- * undefined, the cache already updated as the general path expects). */
-int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
-                       mk_manifold *out);
+ * points; the result written straight into *out, the cache updated. When
+ * rounded cores are apart and SAT's points do not realise their distance,
+ * the answer is mk_collide_gjk_'s. */
+mk_status mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                             mk_manifold_cache *cache, mk_manifold *out);
+
+/* mk_collide_pose's general GJK/EPA path for a checked pair (manifold.c);
+ * MK_ERR_UNSUPPORTED in a build without GJK. */
+mk_status mk_collide_gjk_(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                          mk_manifold_cache *cache, mk_manifold *out);
 
 #endif
