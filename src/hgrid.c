@@ -1191,9 +1191,24 @@ static int visit_run(const struct mk_hgrid *g, uint32_t from, uint32_t to, const
     return 1;
 }
 
+/* The cells r of a dense level (clipped to it), row by row: a row of cells
+ * along x is one run of entries, and the rows are a fixed stride apart in
+ * the level's array of cells. */
+static int visit_dense(const struct mk_hgrid *g, const mk_ixlevel *lv, const mk_range *r, const mk_aabb *q, ix_fn fn, void *ctx)
+{
+    size_t plane = lv->base + (size_t)dense_index(lv, r->lo), nx = (size_t)(r->hi[0] - r->lo[0] + 1);
+    size_t sy = (size_t)lv->n[0], sz = (size_t)lv->n[0] * (size_t)lv->n[1];
+    int64_t y, z;
+    for (z = r->lo[2]; z <= r->hi[2]; ++z, plane += sz) {
+        size_t row = plane;
+        for (y = r->lo[1]; y <= r->hi[1]; ++y, row += sy)
+            if (!visit_run(g, g->ix_dense[row], g->ix_dense[row + nx], q, fn, ctx)) return 0;
+    }
+    return 1;
+}
+
 /* Calls fn once for every indexed static whose box meets q; stops when fn
- * returns 0. A dense level is read row by row: each row of cells is one
- * run of entries. */
+ * returns 0. */
 static int ix_visit(const struct mk_hgrid *g, const mk_aabb *q, ix_fn fn, void *ctx)
 {
     int i, k;
@@ -1212,12 +1227,7 @@ static int ix_visit(const struct mk_hgrid *g, const mk_aabb *q, ix_fn fn, void *
                 if (r.lo[k] > r.hi[k]) break;
             }
             if (k < 3) continue;
-            c[0] = r.lo[0];
-            for (c[2] = r.lo[2]; c[2] <= r.hi[2]; ++c[2])
-                for (c[1] = r.lo[1]; c[1] <= r.hi[1]; ++c[1]) {
-                    const uint32_t *row = g->ix_dense + lv->base + dense_index(lv, c);
-                    if (!visit_run(g, row[0], row[r.hi[0] - r.lo[0] + 1], q, fn, ctx)) return 0;
-                }
+            if (!visit_dense(g, lv, &r, q, fn, ctx)) return 0;
             continue;
         }
         for (c[0] = r.lo[0]; c[0] <= r.hi[0]; ++c[0])
