@@ -13,14 +13,14 @@
  * backend of each case.
  *
  *   ode_scenes [--quick] [--json FILE] [--scene NAME] [--reps N] [--poses FILE] [--frames A:B] [--per-frame FILE]
- *              [--backend NAME] [--steps N] [--start F]
+ *              [--backend NAME] [--steps N] [--start F] [--compare]
  *
  * --backend and --steps run one backend for N steps (short runs under
  * callgrind: --toggle-collect=mk_ode_space_collide or dSpaceCollide then
  * splits a running simulation's space collide per function); --start F
  * (with --poses FILE, the stress scene only) starts the stress heap from
  * the recorded poses of frame F at rest, so that the settled heap's frames
- * run without the minutes its first frames take.
+ * run without the minutes its first frames take. --compare: see compare_pair.
  *
  * Per case and backend: median ms per step (space collide, colliders = the
  * near-callback pass incl. contact joints, total incl. QuickStep), candidate
@@ -65,10 +65,15 @@ static double rng_unit(rng *r) /* splitmix64, uniform in [0, 1) */
 }
 static double rng_range(rng *r, double lo, double hi) { return lo + (hi - lo) * rng_unit(r); }
 
+/* The thread's CPU time: on a shared machine a preemption adds a whole
+ * scheduler tick (4 ms here) to whichever backend's step it hits, and once
+ * more than half of the steps are hit, the medians of a running simulation
+ * measure the ticks (ratios between backends drift towards 1). Cache misses
+ * caused by the other processes still count. */
 static double now_ms(void)
 {
     struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
     return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
 }
 
@@ -272,6 +277,7 @@ static const char *only_backend;
 static int steps_override;
 static int start_frame;
 static recording start_rec; /* frames of --poses, read for --start */
+static int compare_contacts;
 
 typedef struct sim {
     const backend *be;
@@ -293,6 +299,7 @@ typedef struct sim {
     long long substeps;               /* QuickSteps run (more than steps when split at times of impact) */
     int substep_cap;                  /* steps whose split stopped at MAX_SUBSTEPS */
     double max_depth_late, ground_pen_late;
+    struct contact_diff *diff; /* --compare: per class pair, Minko's contacts against dCollide's on the same poses */
 } sim;
 
 static uint32_t geom_id(dGeomID g) { return (uint32_t)(uintptr_t)dGeomGetData(g); }
@@ -585,6 +592,59 @@ static int cmp_pair(const void *x, const void *y)
 #define MAX_CONTACTS 16
 #define BIG_STEP_CONTACTS 100000
 
+/* --compare: for a backend with Minko's narrowphase, every pair is also
+ * handed to dCollide on the same poses (outside the simulation: only its
+ * answer is kept, and the timings then include it). Per pair of ODE classes:
+ * the pairs where the two disagree on the contact count, on whether there is
+ * a contact, on the deepest depth (beyond 1e-4 m + 1 %), or on the deepest
+ * contact's normal (more than 2.6 degrees apart). */
+#define DIFF_CLASSES 16
+typedef struct contact_diff { long long pairs, count, presence, depth, normal; } contact_diff;
+
+static const dContactGeom *deepest(const dContact *c, int n)
+{
+    const dContactGeom *d = NULL;
+    int i;
+    for (i = 0; i < n; i++)
+        if (!d || c[i].geom.depth > d->depth) d = &c[i].geom;
+    return d;
+}
+
+static void compare_pair(sim *s, dGeomID o1, dGeomID o2, const dContact *c, int n)
+{
+    dContact r[MAX_CONTACTS];
+    int c1 = dGeomGetClass(o1), c2 = dGeomGetClass(o2), nr;
+    contact_diff *d;
+    if (c1 >= DIFF_CLASSES || c2 >= DIFF_CLASSES) return;
+    if (!s->diff) s->diff = calloc(DIFF_CLASSES * DIFF_CLASSES, sizeof *s->diff);
+    if (!s->diff) return;
+    nr = dCollide(o1, o2, s->sc->max_contacts, &r[0].geom, (int)sizeof(dContact));
+    d = &s->diff[(c1 < c2 ? c1 : c2) * DIFF_CLASSES + (c1 < c2 ? c2 : c1)];
+    d->pairs++;
+    d->count += n != nr;
+    d->presence += (n > 0) != (nr > 0);
+    if (n > 0 && nr > 0) {
+        const dContactGeom *a = deepest(c, n), *b = deepest(r, nr);
+        double dot = a->normal[0] * b->normal[0] + a->normal[1] * b->normal[1] + a->normal[2] * b->normal[2];
+        d->depth += fabs(a->depth - b->depth) > 1e-4 + 0.01 * fabs(b->depth);
+        d->normal += dot < 0.999;
+    }
+}
+
+static void print_diff(const sim *s)
+{
+    int i, j;
+    if (!s->diff) return;
+    printf("  %s against dCollide on the same poses (pairs that differ; classes as ODE numbers them):\n", s->be->name);
+    printf("    %-7s %10s %8s %9s %8s %8s\n", "classes", "pairs", "count", "presence", "depth", "normal");
+    for (i = 0; i < DIFF_CLASSES; i++)
+        for (j = i; j < DIFF_CLASSES; j++) {
+            const contact_diff *d = &s->diff[i * DIFF_CLASSES + j];
+            if (d->pairs)
+                printf("    %2d-%-4d %10lld %8lld %9lld %8lld %8lld\n", i, j, d->pairs, d->count, d->presence, d->depth, d->normal);
+        }
+}
+
 static void contact_pair(sim *s, dGeomID o1, dGeomID o2, int late)
 {
     dContact c[MAX_CONTACTS];
@@ -592,6 +652,7 @@ static void contact_pair(sim *s, dGeomID o1, dGeomID o2, int late)
     int i, n;
     if (b1 && b2 && dAreConnectedExcluding(b1, b2, dJointTypeContact)) return;
     n = s->be->collide(o1, o2, s->sc->max_contacts, &c[0].geom, (int)sizeof(dContact));
+    if (compare_contacts && s->be->collide != dCollide) compare_pair(s, o1, o2, c, n);
     s->contacts += n;
     for (i = 0; i < n; i++) {
         dJointID j;
@@ -777,6 +838,7 @@ static void sim_free(sim *s)
     free(s->t_space);
     free(s->t_narrow);
     free(s->t_total);
+    free(s->diff);
 }
 
 /* ---- end-of-run metrics -------------------------------------------------- */
@@ -930,6 +992,7 @@ static void run_case(const scene *case_sc, FILE *json, FILE *pf)
         print_row(&sims[b], &m, same);
         json_row(json, &sims[b], &m, same);
     }
+    for (b = 0; b < n; b++) print_diff(&sims[b]);
     for (b = 0; b < n; b++) sim_free(&sims[b]);
 }
 
@@ -1471,6 +1534,8 @@ int main(int argc, char **argv)
             steps_override = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--start") && i + 1 < argc && atoi(argv[i + 1]) >= 0)
             start_frame = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--compare"))
+            compare_contacts = 1;
         else {
             fprintf(stderr,
                     "usage: %s [--quick] [--json FILE] [--scene stress|stress_space|tower|pyramid|hulls|mixed|wall|hull_depth]\n"
@@ -1478,7 +1543,8 @@ int main(int argc, char **argv)
                     "       frame; recorded frames, read or written; the frames A..B-1 measured; each frame's time and\n"
                     "       pairs per space, or each simulated step's times per backend, as JSON Lines)\n"
                     "       [--backend NAME] [--steps N] [--start F]   (one backend; N steps per scene; the stress\n"
-                    "       scene from frame F of --poses FILE, at rest)\n",
+                    "       scene from frame F of --poses FILE, at rest)\n"
+                    "       [--compare]   (Minko's contacts against dCollide's on the same poses, per class pair)\n",
                     argv[0]);
             return 2;
         }
