@@ -1612,6 +1612,103 @@ START_TEST(np_warm_pairs_take_the_best_face)
 }
 END_TEST
 
+// Two polyhedral hulls feed Bullet's manifold as Bullet's own hull-hull
+// algorithm does: every clipped candidate through addContactPoint (each
+// with its feature keys), the deepest last, and the manifold keeps four of
+// them by its own rule, the deepest among them; on a warm frame at the same
+// poses the points that stay keep their impulses. An octagonal
+// prism on one turned by 22.5 degrees about the vertical overlaps in a
+// 16-gon: 16 candidates; the upper prism is tilted a little so one corner
+// is the deepest.
+START_TEST(np_hull_candidates_like_bullet)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btConvexHullShape prism;
+    for (int i = 0; i < 8; i++) {
+        const double t = SIMD_PI / 4 * i;
+        for (int up = 0; up < 2; up++)
+            prism.addPoint(btVector3((btScalar)std::cos(t), up ? btScalar(0.25) : btScalar(-0.25), (btScalar)std::sin(t)), false);
+    }
+    prism.recalcLocalAabb();
+    prism.initializePolyhedralFeatures();
+    btCollisionObject lower, upper;
+    lower.setCollisionShape(&prism);
+    upper.setCollisionShape(&prism);
+    upper.setCollisionFlags(upper.getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+    ContactAddedCallback saved = gContactAddedCallback;
+    gContactAddedCallback = record_written;
+    const btTransform xl = btTransform::getIdentity();
+    // Cores 0.01 deep at the centre, tilted by 0.002 rad about x.
+    const btTransform xu(btQuaternion(btVector3(0, 1, 0), btScalar(SIMD_PI / 8)) * btQuaternion(btVector3(1, 0, 0), btScalar(0.002)),
+                         btVector3(0, btScalar(0.49), 0));
+    lower.setWorldTransform(xl);
+    upper.setWorldTransform(xu);
+    btCollisionObjectWrapper wl(nullptr, &prism, &lower, xl, -1, -1), wu(nullptr, &prism, &upper, xu, -1, -1);
+    const long before = config.stats.minko_algorithms.load();
+    btCollisionAlgorithm *algo = dispatcher.findAlgorithm(&wl, &wu, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), before + 1);
+    btManifoldArray manifolds;
+    btScalar impulse[4];
+    btVector3 where[4];
+    for (int frame = 0; frame < 2; frame++) {
+        btManifoldResult result(&wl, &wu);
+        btDispatcherInfo info;
+        g_written.clear();
+        algo->processCollision(&wl, &wu, info, &result);
+        manifolds.clear();
+        algo->getAllContactManifolds(manifolds);
+        ck_assert_int_eq(manifolds.size(), 1);
+        btPersistentManifold *m = manifolds[0];
+        ck_assert_int_eq((int)g_written.size(), 16);
+        ck_assert_int_eq(m->getNumContacts(), 4);
+        // Fed deepest last; each with a distinct feature pair.
+        for (size_t i = 0; i < g_written.size(); i++) {
+            ck_assert(g_written[i].getDistance() >= g_written.back().getDistance());
+            ck_assert(g_written[i].m_partId0 >= 0 && g_written[i].m_partId1 >= 0);
+            for (size_t j = 0; j < i; j++)
+                ck_assert(g_written[i].m_partId0 != g_written[j].m_partId0 || g_written[i].m_partId1 != g_written[j].m_partId1);
+        }
+        btScalar kept_deepest = BT_LARGE_FLOAT;
+        for (int i = 0; i < 4; i++) kept_deepest = btMin(kept_deepest, m->getContactPoint(i).getDistance());
+        MK_ASSERT_NEAR(kept_deepest, g_written.back().getDistance(), kContactTol);
+        // Bullet's own algorithm on the same poses: the same deepest point.
+        btDefaultCollisionConfiguration native;
+        const PointOut *ref = nullptr;
+        std::vector<PointOut> bullet = collide_once(&native, &prism, xl, &prism, xu);
+        ref = deepest(bullet);
+        ck_assert(ref != nullptr);
+        MK_ASSERT_NEAR(ref->distance, kept_deepest, 1e-4);
+        if (frame == 0) {
+            for (int i = 0; i < 4; i++) {
+                impulse[i] = btScalar(1 + i);
+                where[i] = m->getContactPoint(i).m_localPointB;
+                m->getContactPoint(i).m_appliedImpulse = impulse[i];
+            }
+        } else {
+            // As in Bullet's own manifolds, the candidates that match no
+            // cached point evict one each, so a point may leave and come back
+            // cold (lifetime 1 after the refresh); one that stayed (lifetime
+            // 2) was matched by position and carries its impulse.
+            int stayed = 0;
+            for (int i = 0; i < 4; i++) {
+                const btManifoldPoint &p = m->getContactPoint(i);
+                if (p.getLifeTime() != 2) continue;
+                int k = 0;
+                while (k < 4 && (p.m_localPointB - where[k]).length() > btScalar(1e-4)) k++;
+                ck_assert_msg(k < 4, "point %d stayed but is not one of the cold frame's", i);
+                ck_assert(p.m_appliedImpulse == impulse[k]);
+                stayed++;
+            }
+            ck_assert_int_gt(stayed, 0);
+        }
+    }
+    gContactAddedCallback = saved;
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
+}
+END_TEST
+
 // A running world switches its narrowphase both ways; pairs get new
 // algorithms and the simulation goes on undisturbed.
 START_TEST(np_switch_at_run_time)
@@ -1821,6 +1918,7 @@ Suite *suite()
     tcase_add_test(n, np_shape_changes_seen);
     tcase_add_test(n, np_world_poses_follow_the_objects);
     tcase_add_test(n, np_warm_pairs_take_the_best_face);
+    tcase_add_test(n, np_hull_candidates_like_bullet);
     tcase_add_test(n, np_switch_at_run_time);
     suite_add_tcase(s, n);
     TCase *c = tcase_create("ccd");
