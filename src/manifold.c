@@ -387,15 +387,30 @@ static pair_fn pair_table(mk_shape_type ta, mk_shape_type tb)
     }
 }
 
-/* Moves the reduced manifold from A's frame to world space; `swap` mirrors
- * it when the pair routine ran with the shapes exchanged. */
-static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair *pair, int swap, mk_manifold *out)
+/* Where collide_checked writes: mk_collide_pose's manifold (reduce = 1,
+ * capacity MK_MANIFOLD_MAX_POINTS) or mk_collide_pose_points' buffer
+ * (reduce = 0: every candidate, up to `capacity`). */
+typedef struct collide_out {
+    mk_vec3 *normal;
+    mk_contact_point *points;
+    int *count;
+    int capacity;
+    int reduce;
+} collide_out;
+
+/* The public MK_COLLIDE_MAX_CANDIDATES is the builder's capacity (C99 has
+ * no static assert: a negative array size stops the build). */
+typedef char mk_candidates_capacity_check_[MK_COLLIDE_MAX_CANDIDATES == MK_MF_MAX ? 1 : -1];
+
+/* Moves the manifold from A's frame to world space; `swap` mirrors it when
+ * the pair routine ran with the shapes exchanged. */
+static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair *pair, int swap, const collide_out *out)
 {
     mk_mat3 R = *ra;
     mk_vec3 n = mk_mat3_mul_v3(R, m->normal);
     int i;
-    out->normal = swap ? mk_v3_neg(n) : n;
-    out->count = m->count;
+    *out->normal = swap ? mk_v3_neg(n) : n;
+    *out->count = m->count;
     for (i = 0; i < m->count; ++i) {
         const mk_mf_point *p = &m->p[i];
         mk_contact_point *c = &out->points[i];
@@ -421,11 +436,11 @@ static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair 
 }
 
 /* mk_collide_pose after its checks: the pair routine (the table's, or
- * `fn` when given), the reduction and the move to world space. Out of
- * line, so the checks and the two boxes' path run without this frame (a
- * whole mk_mf). */
+ * `fn` when given), the reduction (unless out->reduce is 0) and the move to
+ * world space. Out of line, so the checks and the two boxes' path run
+ * without this frame (a whole mk_mf). */
 static MK_NOINLINE mk_status collide_checked(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
-                                             mk_manifold_cache *cache, mk_manifold *out, pair_fn fn)
+                                             mk_manifold_cache *cache, const collide_out *out, pair_fn fn)
 {
     mk_status st;
     int swap = 0;
@@ -446,8 +461,8 @@ static MK_NOINLINE mk_status collide_checked(const mk_shape *a, const mk_pose *x
 #ifndef MK_WITHOUT_SAT
     if (fn == polytopes && polytopes_apart(a, xa->p, b, xb->p, margin)) {
         if (cache) cache->axis = MK_SAT_NONE;
-        out->count = 0;
-        out->normal = mk_v3(0, 0, 1);
+        *out->count = 0;
+        *out->normal = mk_v3(0, 0, 1);
         return MK_OK;
     }
 #endif
@@ -458,16 +473,20 @@ static MK_NOINLINE mk_status collide_checked(const mk_shape *a, const mk_pose *x
     m.slop = cache && cache->mode == MK_MANIFOLD_BEST_FACE ? MK_MF_SLOP_EXACT : MK_MF_SLOP_IDS;
     m.normal = mk_v3(0, 0, 1);
     if ((st = fn(&p, &m, cache)) != MK_OK) return st;
-    mk_mf_reduce(&m);
+    if (out->reduce) mk_mf_reduce(&m);
+    if (m.count > out->capacity) {
+        *out->count = m.count; /* how many the caller needs room for */
+        return MK_ERR_CAPACITY;
+    }
     finish(&m, &xa->r, xa->p, &p, swap, out);
     return MK_OK;
 }
 
-mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
-                          mk_manifold_cache *cache, mk_manifold *out)
+/* The checks shared by mk_collide_pose and mk_collide_pose_points. */
+static MK_INLINE mk_status collide_args(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                                        const mk_manifold_cache *cache)
 {
     mk_status st;
-    if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
     /* Two boxes (the common pair) are checked with their type known. */
     if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX ? !mk_shape_ok_typed_(a, MK_SHAPE_BOX) || !mk_shape_ok_typed_(b, MK_SHAPE_BOX)
                                                           : !mk_shape_ok_typed_(a, a->type) || !mk_shape_ok_typed_(b, b->type)) {
@@ -478,13 +497,57 @@ mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *
     if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
     if (margin < 0) return MK_ERR_BAD_ARGUMENT;
     if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
+    return MK_OK;
+}
+
+mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                          mk_manifold_cache *cache, mk_manifold *out)
+{
+    mk_status st;
+    collide_out o;
+    if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
+    if ((st = collide_args(a, xa, b, xb, margin, cache)) != MK_OK) return st;
 #ifndef MK_WITHOUT_SAT
     /* Two boxes in one pass (box_box.c); GJK when rounded cores are apart
      * and SAT's points fall short of their distance. */
-    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX)
-        return mk_box_box_collide(a, xa, b, xb, margin, cache, out) ? MK_OK : collide_checked(a, xa, b, xb, margin, cache, out, generic);
+    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX && mk_box_box_collide(a, xa, b, xb, margin, cache, out)) return MK_OK;
 #endif
-    return collide_checked(a, xa, b, xb, margin, cache, out, NULL);
+    o.normal = &out->normal;
+    o.points = out->points;
+    o.count = &out->count;
+    o.capacity = MK_MANIFOLD_MAX_POINTS;
+    o.reduce = 1;
+#ifndef MK_WITHOUT_SAT
+    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX) return collide_checked(a, xa, b, xb, margin, cache, &o, generic);
+#endif
+    return collide_checked(a, xa, b, xb, margin, cache, &o, NULL);
+}
+
+/* Box pairs come reduced from box_box.c: their manifold is copied. */
+mk_status mk_collide_pose_points(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                                 mk_manifold_cache *cache, mk_vec3 *normal, mk_contact_point *points, int capacity, int *count)
+{
+    mk_status st;
+    collide_out o;
+    int i;
+    if (!a || !xa || !b || !xb || !normal || !points || !count) return MK_ERR_NULL;
+    if (capacity < 0) return MK_ERR_BAD_ARGUMENT;
+    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX) {
+        mk_manifold m;
+        if ((st = mk_collide_pose(a, xa, b, xb, margin, cache, &m)) != MK_OK) return st;
+        *count = m.count;
+        if (m.count > capacity) return MK_ERR_CAPACITY;
+        *normal = m.normal;
+        for (i = 0; i < m.count; ++i) points[i] = m.points[i];
+        return MK_OK;
+    }
+    if ((st = collide_args(a, xa, b, xb, margin, cache)) != MK_OK) return st;
+    o.normal = normal;
+    o.points = points;
+    o.count = count;
+    o.capacity = capacity;
+    o.reduce = 0;
+    return collide_checked(a, xa, b, xb, margin, cache, &o, NULL);
 }
 
 /* Checks and converts the transforms (after the shapes, in argument order),

@@ -164,6 +164,30 @@ MK_API mk_status mk_collide(const mk_shape *a, mk_transform xa, const mk_shape *
 MK_API mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
                                  mk_real margin, mk_manifold_cache *cache, mk_manifold *out);
 
+/* Unreduced candidates. mk_collide_pose_points() is mk_collide_pose()
+ * without the reduction to four points: it writes every candidate the pair
+ * routine built (the clipped polygon's points, a cylinder rim's, ...), at
+ * most MK_COLLIDE_MAX_CANDIDATES, in the order they were built, into the
+ * caller's buffer `points` of `capacity` entries, with *count and *normal;
+ * each point follows mk_collide's conventions (world and local witnesses,
+ * depth, features, flags), and the points mk_collide_pose would keep are
+ * among them, bit for bit, given the same cache state. It is for hosts that
+ * reduce by their own rule, e.g. Bullet's btPersistentManifold, which keeps
+ * four of the points it is fed by its own area rule as Bullet's polyhedral
+ * clipper does. Two boxes are the exception: box_box.c reduces while it
+ * clips, so a box-box pair returns the same (at most four) points as
+ * mk_collide_pose, as Bullet's own dBoxBox2 culls to four itself. A buffer
+ * too small for the candidates is MK_ERR_CAPACITY, never a silent cut: then
+ * *count is the number needed, the points and the normal are untouched, and
+ * the cache has advanced as for a successful call. Validation and the cache
+ * are mk_collide_pose's; a NULL buffer, count or normal is MK_ERR_NULL, a
+ * negative capacity MK_ERR_BAD_ARGUMENT. Nothing allocates; the cost is
+ * mk_collide_pose's less the reduction. */
+#define MK_COLLIDE_MAX_CANDIDATES 64
+MK_API mk_status mk_collide_pose_points(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb,
+                                        mk_real margin, mk_manifold_cache *cache, mk_vec3 *normal,
+                                        mk_contact_point *points, int capacity, int *count);
+
 #ifdef __cplusplus
 }
 #endif
