@@ -13,12 +13,20 @@
 // Method, the same for every backend: before the timed runs of a scene each
 // backend runs once untimed on it (setup and a few frames: the heap, the
 // caches and the allocator's thresholds are warm for all, not only for those
-// that come after the first); the repetitions then run the backends in an
-// order rotated by one each time, so no backend is always first; a backend's
-// figure is the median frame of each repetition, the best (lowest) of those
-// medians over the repetitions. Freed memory stays in the process heap
-// (mallopt), so a backend does not pay page faults for memory its
-// predecessor handed back to the system.
+// that come after the first); each repetition then runs every backend with
+// budget left, one after another, each from a fresh setup, in an order
+// shuffled afresh (fixed seed), so no backend always follows the same one; a
+// backend's figure is the median frame of each repetition, the best (lowest)
+// of those medians over the repetitions. On a shared machine load comes in
+// bursts about as long as one backend's whole run (tens of ms): with two or
+// three repetitions a burst decided a row, and two rows of one structure read
+// up to 30 % apart; the best of many repetitions is the quiet figure (the
+// cheap backends get all of them, the slow ones as many as --budget allows).
+// Frames are not interleaved across backends: every frame would then start
+// with caches full of the other backends' data, and the rows of one
+// structure still disagreed by 10 % (measured). Freed memory stays in the
+// process heap (mallopt), so a backend does not pay page faults for memory
+// its predecessor handed back to the system.
 // (--budget: time per backend and scene over all repetitions, default 12000;
 //  --skip NAME[,NAME...] leaves backends out, e.g. bullet.axis_sweep3_32 at
 //  n = 100k, whose proxy creation alone is quadratic: minutes per scene)
@@ -561,7 +569,7 @@ static bool listed(const char *list, const char *name)
 int main(int argc, char **argv)
 {
     bool quick = false;
-    int reps = 3, only_n = 0;
+    int reps = 8, only_n = 0;
     double budget_ms = 12000;
     const char *json = nullptr, *only = nullptr, *only_backend = nullptr, *skip_backend = nullptr;
     for (int i = 1; i < argc; ++i) {
@@ -598,7 +606,7 @@ int main(int argc, char **argv)
     dInitODE2(0);
     int bad = 0;
     std::printf("broadphase: ms per frame (update + pair set): the median frame of each repetition, best of %d repetition(s);\n"
-                "every backend warmed once untimed, order rotated between repetitions;\n"
+                "every backend warmed once untimed, order shuffled per repetition;\n"
                 "ratio = backend cpu / minko.auto cpu (thread CPU time: the machine is shared, wall time is noisier)\n", reps);
     for (const Plan &p : plan) {
         if ((only && p.scene != only) || (only_n && p.n != only_n)) continue;
@@ -623,9 +631,14 @@ int main(int argc, char **argv)
         // Warm-up, untimed and not counted: setup and a few frames of each.
         for (int b = 0; b < NBACKENDS; ++b)
             if (run[b]) { Result w; run_backend(s, b, w, left[b], 3); }
-        for (int rep = 0; rep < reps; ++rep)
-            for (int i = 0; i < NBACKENDS; ++i) {
-                int b = (rep + i) % NBACKENDS; // rotated: no backend is always first
+        // A fresh order each repetition (fixed seed): no backend always
+        // runs right after the same neighbour.
+        Rng order_rng{0x5EEDull + (uint64_t)p.n};
+        std::vector<int> order(NBACKENDS);
+        for (int b = 0; b < NBACKENDS; ++b) order[b] = b;
+        for (int rep = 0; rep < reps; ++rep) {
+            for (int i = NBACKENDS; i > 1; --i) std::swap(order[i - 1], order[order_rng.next() % (uint64_t)i]);
+            for (int b : order) {
                 Result r;
                 if (!run[b] || left[b] <= 0) continue;
                 run_backend(s, b, r, left[b], s.frames.size());
@@ -639,6 +652,7 @@ int main(int argc, char **argv)
                 acc.bytes_per_proxy = r.bytes_per_proxy;
                 acc.own_bytes_per_proxy = r.own_bytes_per_proxy;
             }
+        }
         double fl = floor_ms(s), mk = res[0].cpu_median(), best_comp = 1e300;
         std::string best_name;
         for (int b = NMINKO; b < NBACKENDS; ++b)

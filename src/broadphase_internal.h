@@ -30,6 +30,7 @@ enum {
     MK_PS_CAND = 16,     /* grid: the two proxies share a cell */
     MK_PS_REJECTED = 32, /* grid: overlapping but the filter said no */
     MK_PS_STATIC = 64,   /* grid: overlapping, found through the static index */
+    MK_PS_FOUND = 128,   /* grid: ...by a look-up of this update (cleared by its re-test) */
     MK_PS_KEEP = MK_PS_LIVE | MK_PS_CAND | MK_PS_STATIC /* entries without these go */
 };
 

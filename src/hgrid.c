@@ -290,13 +290,16 @@ static void count_sized(struct mk_hgrid *g, uint32_t slot, int size_level, int a
     g->sized_changed = 1;
 }
 
-/* floor(v * inv) for |v * inv| < 2^41 (guaranteed by level_of). */
-static int64_t cell_coord(mk_real v, double inv)
+/* floor(x) for |x| < 2^41, without a call into libm (these run several
+ * times per moved proxy per update). */
+static int64_t floor_small(double x)
 {
-    double x = (double)v * inv;
     int64_t i = (int64_t)x;
     return i - (x < (double)i);
 }
+
+/* floor(v * inv) for |v * inv| < 2^41 (guaranteed by level_of). */
+static int64_t cell_coord(mk_real v, double inv) { return floor_small((double)v * inv); }
 
 /* The cells of box b grown by `margin` cells on every side. Re-filings of
  * slow boxes use 1/16 (fat_range), so a box jittering across a cell wall is
@@ -309,10 +312,9 @@ static int range_with_margin(const mk_aabb *b, int level, double margin, mk_rang
     int k;
     for (k = 0; k < 3; ++k) {
         double lo = (double)(&b->lo.x)[k] * inv - margin, hi = (double)(&b->hi.x)[k] * inv + margin;
-        int64_t i;
         if (!(lo > -0x1p41 && hi < 0x1p41)) return 0;
-        i = (int64_t)lo; r->lo[k] = i - (lo < (double)i);
-        i = (int64_t)hi; r->hi[k] = i - (hi < (double)i);
+        r->lo[k] = floor_small(lo);
+        r->hi[k] = floor_small(hi);
     }
     return 1;
 }
@@ -842,6 +844,16 @@ static uint32_t next_state(const mk_bp *bp, struct mk_hgrid *g, uint32_t a, uint
     return s | (mk_bp_filter_keeps_(bp, a, b) ? MK_PS_LIVE : MK_PS_REJECTED);
 }
 
+/* An index pair whose dynamic member looked up its statics in this update
+ * (and neither member changed its filter words): it overlaps if and only
+ * if the look-up found it (FOUND), and the look-up's swake already covers
+ * the gap of one it did not find. */
+#define MK_INDEX_BITS_ (MK_PS_STATIC | MK_PS_FOUND | MK_PS_LIVE | MK_PS_REJECTED)
+static int looked_up(uint32_t state, uint8_t sa, uint8_t sb)
+{
+    return (state & MK_PS_STATIC) && ((sa | sb) & (ST_QUERY | ST_REFILTER)) == ST_QUERY && index_pair(sa, sb);
+}
+
 static void retest(mk_bp *bp, struct mk_hgrid *g, int all)
 {
     /* locals: the loop's common path reads only these, and the compiler
@@ -858,9 +870,10 @@ static void retest(mk_bp *bp, struct mk_hgrid *g, int all)
         /* the common case: both filed as before, too little travel to matter
          * (every entry here has CAND: the grid sets it on insertion) */
         if (!all && !(sab & ST_DIRTY)) continue;
-        if (!(sab & ST_SLOW) && pa->travel + pb->travel < (double)e->wake) continue;
         old = e->state;
-        s = next_state(bp, g, a, b, e);
+        if (looked_up(old, pa->st, pb->st)) s = old & MK_PS_FOUND ? old & ~(uint32_t)MK_PS_FOUND : old & ~(uint32_t)MK_INDEX_BITS_;
+        else if (!(sab & ST_SLOW) && pa->travel + pb->travel < (double)e->wake) continue;
+        else s = next_state(bp, g, a, b, e) & ~(uint32_t)MK_PS_FOUND;
         e->state = s;
         if ((s ^ old) & MK_PS_KEEP) mk_pairs_touch_(bp, e);
     }
@@ -950,11 +963,7 @@ static void centre_cell(const mk_aabb *b, int level, int64_t *c)
 {
     double inv = inv_cell(level);
     int k;
-    for (k = 0; k < 3; ++k) {
-        double x = 0.5 * ((double)(&b->lo.x)[k] + (double)(&b->hi.x)[k]) * inv;
-        c[k] = (int64_t)x;
-        c[k] -= x < (double)c[k];
-    }
+    for (k = 0; k < 3; ++k) c[k] = floor_small(0.5 * ((double)(&b->lo.x)[k] + (double)(&b->hi.x)[k]) * inv);
 }
 
 static int entry_in(const mk_ixent *e, int level, const int64_t *c)
@@ -1161,12 +1170,12 @@ static int query_range(const mk_aabb *q, int level, double grow, double most, mk
     int k;
     for (k = 0; k < 3; ++k) {
         double a = (double)(&q->lo.x)[k], b = (double)(&q->hi.x)[k];
-        double lo = floor((a - grow - fabs(a) * 0x1p-40 - grow * 0x1p-30) * inv);
-        double hi = floor((b + grow + fabs(b) * 0x1p-40 + grow * 0x1p-30) * inv);
+        double lo = (a - grow - fabs(a) * 0x1p-40 - grow * 0x1p-30) * inv;
+        double hi = (b + grow + fabs(b) * 0x1p-40 + grow * 0x1p-30) * inv;
         if (!(lo > -0x1p41 && hi < 0x1p41)) return 0;
-        cells *= hi - lo + 1;
-        r->lo[k] = (int64_t)lo;
-        r->hi[k] = (int64_t)hi;
+        r->lo[k] = floor_small(lo);
+        r->hi[k] = floor_small(hi);
+        cells *= (double)(r->hi[k] - r->lo[k] + 1);
     }
     return cells <= most;
 }
@@ -1182,9 +1191,24 @@ static int visit_run(const struct mk_hgrid *g, uint32_t from, uint32_t to, const
     return 1;
 }
 
+/* The cells r of a dense level (clipped to it), row by row: a row of cells
+ * along x is one run of entries, and the rows are a fixed stride apart in
+ * the level's array of cells. */
+static int visit_dense(const struct mk_hgrid *g, const mk_ixlevel *lv, const mk_range *r, const mk_aabb *q, ix_fn fn, void *ctx)
+{
+    size_t plane = lv->base + (size_t)dense_index(lv, r->lo), nx = (size_t)(r->hi[0] - r->lo[0] + 1);
+    size_t sy = (size_t)lv->n[0], sz = (size_t)lv->n[0] * (size_t)lv->n[1];
+    int64_t y, z;
+    for (z = r->lo[2]; z <= r->hi[2]; ++z, plane += sz) {
+        size_t row = plane;
+        for (y = r->lo[1]; y <= r->hi[1]; ++y, row += sy)
+            if (!visit_run(g, g->ix_dense[row], g->ix_dense[row + nx], q, fn, ctx)) return 0;
+    }
+    return 1;
+}
+
 /* Calls fn once for every indexed static whose box meets q; stops when fn
- * returns 0. A dense level is read row by row: each row of cells is one
- * run of entries. */
+ * returns 0. */
 static int ix_visit(const struct mk_hgrid *g, const mk_aabb *q, ix_fn fn, void *ctx)
 {
     int i, k;
@@ -1203,12 +1227,7 @@ static int ix_visit(const struct mk_hgrid *g, const mk_aabb *q, ix_fn fn, void *
                 if (r.lo[k] > r.hi[k]) break;
             }
             if (k < 3) continue;
-            c[0] = r.lo[0];
-            for (c[2] = r.lo[2]; c[2] <= r.hi[2]; ++c[2])
-                for (c[1] = r.lo[1]; c[1] <= r.hi[1]; ++c[1]) {
-                    const uint32_t *row = g->ix_dense + lv->base + dense_index(lv, c);
-                    if (!visit_run(g, row[0], row[r.hi[0] - r.lo[0] + 1], q, fn, ctx)) return 0;
-                }
+            if (!visit_dense(g, lv, &r, q, fn, ctx)) return 0;
             continue;
         }
         for (c[0] = r.lo[0]; c[0] <= r.hi[0]; ++c[0])
@@ -1240,8 +1259,11 @@ static int meet_static(void *c, uint32_t t, const mk_aabb *box)
     }
     if (!(e = mk_pairs_get_(bp, q->d, t, &st))) { if (q->g->fail == MK_OK) q->g->fail = st; return 0; }
     old = e->state;
-    if (!(old & MK_PS_STATIC)) e->wake = 0; /* the re-test of this update sets it */
-    e->state |= MK_PS_STATIC;
+    /* FOUND tells the re-test of this update that the pair overlaps, so it
+     * need not read the boxes again; wake 0: the first re-test of an update
+     * without a look-up reads them. */
+    e->wake = 0;
+    e->state |= MK_PS_STATIC | MK_PS_FOUND;
     if (!(old & (MK_PS_LIVE | MK_PS_REJECTED))) e->state |= mk_bp_filter_keeps_(bp, q->d, t) ? MK_PS_LIVE : MK_PS_REJECTED;
     if ((e->state ^ old) & MK_PS_LIVE) mk_pairs_touch_(bp, e);
     return 1;
