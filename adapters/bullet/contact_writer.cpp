@@ -106,8 +106,7 @@ bool write_contacts(btManifoldResult *result, const PairContact *points, int cou
     if (!by_features || w0->m_partId != -1 || w1->m_partId != -1) {
         // Shared manifold, matching by position asked, or part ids taken:
         // leave matching to Bullet.
-        for (int i = 0; i < count; i++)
-            result->addContactPoint(points[i].normal_on_b, points[i].point_on_b, points[i].distance);
+        add_contacts(result, points, count, false);
         return false;
     }
     const btCollisionObject *o0 = w0->getCollisionObject(), *o1 = w1->getCollisionObject();
@@ -212,6 +211,26 @@ bool write_contacts(btManifoldResult *result, const PairContact *points, int cou
     if (gContactStartedCallback && cached == 0 && n > 0) gContactStartedCallback(m);
     // Every point of the manifold written now, none kept from before?
     return n == m->getNumContacts() && n > 0;
+}
+
+void add_contacts(btManifoldResult *result, const PairContact *points, int count, bool keys)
+{
+    const btCollisionObjectWrapper *w0 = result->getBody0Wrap(), *w1 = result->getBody1Wrap();
+    if (!keys || w0->m_partId != -1 || w1->m_partId != -1) {
+        for (int i = 0; i < count; i++)
+            result->addContactPoint(points[i].normal_on_b, points[i].point_on_b, points[i].distance);
+        return;
+    }
+    // The result stamps its shape identifiers on every point it adds (in
+    // the manifold's body order): the keys go in as identifiers, and the
+    // wrappers' own come back afterwards.
+    for (int i = 0; i < count; i++) {
+        result->setShapeIdentifiersA(points[i].feature_a, w0->m_index);
+        result->setShapeIdentifiersB(points[i].feature_b, w1->m_index);
+        result->addContactPoint(points[i].normal_on_b, points[i].point_on_b, points[i].distance);
+    }
+    result->setShapeIdentifiersA(w0->m_partId, w0->m_index);
+    result->setShapeIdentifiersB(w1->m_partId, w1->m_index);
 }
 
 void refresh_contacts(btManifoldResult *result, bool all_fresh)

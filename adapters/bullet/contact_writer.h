@@ -50,6 +50,17 @@ struct PairContact {
 // call (matched by features; none kept from an earlier frame).
 bool write_contacts(btManifoldResult *result, const PairContact *points, int count, bool by_features = true);
 
+// Any number of points, each through btManifoldResult::addContactPoint in
+// the given order, as Bullet's polyhedral clipper feeds its candidates: a
+// point replaces the cached one nearest to it (within the breaking
+// threshold) and takes over its impulses, and a fifth point evicts the one
+// whose loss keeps the deepest point and the largest area, so the manifold
+// keeps four by Bullet's own rule. With `keys` (the manifold belongs to this
+// pair alone) each point also carries its feature keys in m_partId0 /
+// m_partId1, as write_contacts' points do, when both wrappers leave their
+// part ids free.
+void add_contacts(btManifoldResult *result, const PairContact *points, int count, bool keys);
+
 // The owner's refreshContactPoints after write_contacts: Bullet's own unless
 // `all_fresh` (write_contacts returned true), when the points just written
 // only age by one frame and go to gContactProcessedCallback, which is all

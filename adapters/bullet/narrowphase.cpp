@@ -78,6 +78,41 @@ bool polyhedral_hulls(const btCollisionShape *a, const btCollisionShape *b)
            static_cast<const btPolyhedralConvexShape *>(b)->getConvexPolyhedron();
 }
 
+// Minko's points in Bullet's convention, for the wrappers in Bullet's order
+// (`flip`: they are in the other order than the algorithm's A and B).
+// Minko: normal from A to B, depth > 0 penetrating, point_b on B. Bullet:
+// normal on B pointing from B to A, signed distance < 0 penetrating.
+// `touching_only` drops speculative points. Returns how many were written.
+int to_bullet(const mk_vec3 &normal, const mk_contact_point *points, int count, bool flip, bool touching_only,
+              PairContact *out)
+{
+    const btVector3 n = to_bt(normal);
+    const bool ab = !flip;
+    int k = 0;
+    for (int j = 0; j < count; j++) {
+        const mk_contact_point &c = points[j];
+        if (touching_only && c.depth < 0) continue;
+        PairContact &p = out[k++];
+        p.normal_on_b = ab ? -n : n;
+        p.point_on_b = to_bt(ab ? c.point_b : c.point_a);
+        p.distance = -c.depth;
+        p.feature_a = ab ? MK_FEATURE_PAIR_A(c.features) : MK_FEATURE_PAIR_B(c.features);
+        p.feature_b = ab ? MK_FEATURE_PAIR_B(c.features) : MK_FEATURE_PAIR_A(c.features);
+    }
+    return k;
+}
+
+// Moves the deepest point to the end, so that when points go through
+// addContactPoint no shallower point added after it can replace it.
+void deepest_last(PairContact *pts, int count)
+{
+    if (count < 2) return;
+    int deepest = 0;
+    for (int i = 1; i < count; i++)
+        if (pts[i].distance < pts[deepest].distance) deepest = i;
+    std::swap(pts[deepest], pts[count - 1]);
+}
+
 // One pair's algorithm: the two mapped shapes, Minko's per-pair cache (the
 // previous separating axis) and the manifold. Lives exactly as long as the
 // broadphase pair, in Bullet's algorithm pool.
@@ -148,7 +183,12 @@ public:
             mk_pose scratch[2];
             const mk_pose *pa, *pb;
             st = m_config->world_poses(wa, m_a, wb, m_b, scratch, &pa, &pb);
-            if (st == MK_OK) st = mk_collide_pose(&sa, pa, &sb, pb, threshold, &m_cache, &mf);
+            if (st == MK_OK && hulls) {
+                st = write_candidates(result, sa, pa, sb, pb, threshold, flip);
+                if (st == MK_OK) return;
+            } else if (st == MK_OK) {
+                st = mk_collide_pose(&sa, pa, &sb, pb, threshold, &m_cache, &mf);
+            }
         }
         if (st != MK_OK) {
             m_config->stats.collide_errors++;
@@ -157,10 +197,7 @@ public:
         // Nothing to write and nothing cached to remove or refresh: the common
         // case of a pair whose boxes overlap while the shapes do not.
         if (mf.count == 0 && (!m_own || m_manifold->getNumContacts() == 0)) return;
-        // Minko: normal from A to B, depth > 0 penetrating, point_b on B.
-        // Bullet: normal on B pointing from B to A, signed distance < 0 penetrating.
         PairContact pts[MK_MANIFOLD_MAX_POINTS];
-        const btVector3 n = to_bt(mf.normal);
         // Box-box pairs report touching points only, as Bullet's own
         // btBoxBoxDetector does. Measured (demos/bullet_scenes --scene tower
         // --trials 7): with speculative box points the 10-box tower drifts
@@ -172,33 +209,9 @@ public:
         // pair restarts cold); measured that way the tower penetrates 0.027 m
         // instead of 0.010 m.
         const bool touching_only = m_a.shape.type == MK_SHAPE_BOX && m_b.shape.type == MK_SHAPE_BOX;
-        int count = 0;
-        for (int j = 0; j < mf.count; j++) {
-            const mk_contact_point &c = mf.points[j];
-            if (touching_only && c.depth < 0) continue;
-            const int i = count++;
-            const bool ab = !flip;
-            pts[i].normal_on_b = ab ? -n : n;
-            pts[i].point_on_b = to_bt(ab ? c.point_b : c.point_a);
-            pts[i].distance = -c.depth;
-            pts[i].feature_a = ab ? MK_FEATURE_PAIR_A(c.features) : MK_FEATURE_PAIR_B(c.features);
-            pts[i].feature_b = ab ? MK_FEATURE_PAIR_B(c.features) : MK_FEATURE_PAIR_A(c.features);
-        }
-        // Two polyhedral hulls go through Bullet's own addContactPoint, the
-        // way Bullet's hull-hull algorithm fills its manifold (a point
-        // replaces the cached one nearest to it, a fifth point the one whose
-        // loss keeps the largest area), with the deepest point last so no
-        // nearby shallower point replaces it. Measured (demos/bullet_scenes
-        // --scene convex_stack --backend minko_np --trials 3, 960 Taru
-        // hulls, median): matched by feature 242 fell (one trial), through
-        // addContactPoint in Minko's order 209, deepest last 182 (native
-        // 121).
-        if (hulls && count > 1) {
-            int deepest = 0;
-            for (int i = 1; i < count; i++)
-                if (pts[i].distance < pts[deepest].distance) deepest = i;
-            std::swap(pts[deepest], pts[count - 1]);
-        }
+        const int count = to_bullet(mf.normal, mf.points, mf.count, flip, touching_only, pts);
+        // (A polyhedral hull pair lands here only after an error: no points,
+        // and Bullet's own refresh and matching for what its manifold holds.)
         const bool all_fresh = write_contacts(result, pts, count, m_own && !hulls);
         if (m_own) refresh_contacts(result, all_fresh);
     }
@@ -224,6 +237,39 @@ private:
     {
         m_cache = mk_manifold_cache();
         m_cache.mode = MK_MANIFOLD_BEST_FACE;
+    }
+
+    // Two polyhedral hulls: every candidate Minko clipped, not its four,
+    // through Bullet's own addContactPoint, deepest last, the way Bullet's
+    // hull-hull algorithm (btPolyhedralContactClipping) fills its manifold,
+    // which then keeps four by its own rule (contact_writer.h, add_contacts).
+    // Measured (demos/bullet_scenes --scene convex_stack --trials 7, 960
+    // Taru hulls, mean +- sd; native 122 +- 8.6 fell, drift 31.2, ke_end
+    // 471): Minko's four points, deepest last, 192 +- 5.3 fell, drift 42.2,
+    // ke_end 928; every candidate, deepest last, 135 +- 11, 34.4, 462 (drift
+    // and ke_end within noise). Tried and left out: impulses handed back by
+    // feature key to points the area rule evicted and re-added (185 +- 15:
+    // the churn's cold restarts damp the pile as in Bullet); one point only
+    // while the cores are apart, as Bullet's GJK path (133 +- 12, noise
+    // against this); that point first, then the clip order (154 +- 9.9).
+    // Out of line: the candidates' buffers (some 12 kB in double) stay off
+    // the frame every other pair runs in.
+    __attribute__((noinline)) mk_status write_candidates(btManifoldResult *result, const mk_shape &sa, const mk_pose *pa,
+                                                         const mk_shape &sb, const mk_pose *pb, btScalar threshold, bool flip)
+    {
+        mk_contact_point cand[MK_COLLIDE_MAX_CANDIDATES];
+        PairContact pts[MK_COLLIDE_MAX_CANDIDATES];
+        mk_vec3 normal;
+        int count = 0;
+        const mk_status st = mk_collide_pose_points(&sa, pa, &sb, pb, threshold, &m_cache, &normal, cand,
+                                                    MK_COLLIDE_MAX_CANDIDATES, &count);
+        if (st != MK_OK) return st;
+        if (count == 0 && (!m_own || m_manifold->getNumContacts() == 0)) return MK_OK;
+        count = to_bullet(normal, cand, count, flip, false, pts);
+        deepest_last(pts, count);
+        add_contacts(result, pts, count, m_own);
+        if (m_own) result->refreshContactPoints();
+        return MK_OK;
     }
 
     btPersistentManifold *m_manifold;
@@ -421,17 +467,18 @@ bool CollisionConfiguration::minko_handles(const ShapeMap &a, const ShapeMap &b)
 
 namespace {
 
-// Whether a pose was made from world transform t, bit for bit: the origin
-// first, where a moving body differs. Compared as bytes (inlined word
-// compares): on 3000 boxes (callgrind, 300 steps) world_poses fell from 370
-// to 315 instructions per pair against twelve scalar compares. -0 against +0
-// then only costs a rebuilt pose, and a NaN transform keeps its cached error
-// status.
-bool made_from(const btScalar *from, const btTransform &t)
+// Whether a pose was made from world transform t and axis rotation q, bit
+// for bit: the origin first, where a moving body differs. Compared as bytes
+// (inlined word compares): on 3000 boxes (callgrind, 300 steps) world_poses
+// fell from 370 to 315 instructions per pair against twelve scalar compares.
+// Any change, down to one ulp (or -0 for +0), makes a new pose, and a NaN
+// transform keeps its cached error status.
+inline bool made_from(const btScalar *from, const mk_quat &axis, const btTransform &t, const mk_quat &q)
 {
     const size_t row = 3 * sizeof(btScalar);
     return std::memcmp(from, &t.getOrigin().x(), row) == 0 && std::memcmp(from + 3, &t.getBasis()[0].x(), row) == 0 &&
-           std::memcmp(from + 6, &t.getBasis()[1].x(), row) == 0 && std::memcmp(from + 9, &t.getBasis()[2].x(), row) == 0;
+           std::memcmp(from + 6, &t.getBasis()[1].x(), row) == 0 && std::memcmp(from + 9, &t.getBasis()[2].x(), row) == 0 &&
+           std::memcmp(&axis, &q, sizeof q) == 0;
 }
 
 void keep_source(btScalar *from, const btTransform &t)
@@ -450,29 +497,6 @@ void keep_source(btScalar *from, const btTransform &t)
 
 }  // namespace
 
-const mk_pose *CollisionConfiguration::cached_pose(const btCollisionObjectWrapper *w, const ShapeMap &map,
-                                                   mk_pose *scratch, mk_status *st)
-{
-    const btCollisionObject *object = w->getCollisionObject();
-    const btTransform &t = w->getWorldTransform();
-    const int i = object->getWorldArrayIndex();
-    if (&t != &object->getWorldTransform() || i < 0 || i >= m_poses.size()) {
-        *st = minko_pose(t, map, scratch);
-        return scratch;
-    }
-    PoseEntry &e = m_poses[i];
-    const mk_quat &q = map.axis;
-    if (e.object != object || !made_from(e.from, t) || e.axis.x != q.x || e.axis.y != q.y || e.axis.z != q.z ||
-        e.axis.w != q.w) {
-        e.object = object;
-        keep_source(e.from, t);
-        e.axis = q;
-        e.status = minko_pose(t, map, &e.pose);
-    }
-    *st = e.status;
-    return &e.pose;
-}
-
 mk_status CollisionConfiguration::world_poses(const btCollisionObjectWrapper *wa, const ShapeMap &ma,
                                               const btCollisionObjectWrapper *wb, const ShapeMap &mb, mk_pose scratch[2],
                                               const mk_pose **pa, const mk_pose **pb)
@@ -489,10 +513,33 @@ mk_status CollisionConfiguration::world_poses(const btCollisionObjectWrapper *wa
         if (top >= m_poses.capacity()) m_poses.reserve(std::max(top + 1, 2 * m_poses.capacity()));
         m_poses.resize(top + 1, PoseEntry());
     }
-    mk_status st;
-    *pa = cached_pose(wa, ma, &scratch[0], &st);
-    if (st == MK_OK) *pb = cached_pose(wb, mb, &scratch[1], &st);
-    return st;
+    // One loop body for both objects, so that it is inlined once: per object
+    // the lookup is its index, two pointer compares and the bytes of its
+    // transform.
+    const btCollisionObjectWrapper *const w[2] = {wa, wb};
+    const ShapeMap *const map[2] = {&ma, &mb};
+    const mk_pose **const out[2] = {pa, pb};
+    for (int k = 0; k < 2; k++) {
+        const btCollisionObject *object = w[k]->getCollisionObject();
+        const btTransform &t = w[k]->getWorldTransform();
+        const int i = object->getWorldArrayIndex();
+        mk_status st;
+        if (&t != &object->getWorldTransform() || i < 0) {  // a compound's child, or outside a world
+            st = minko_pose(t, *map[k], &scratch[k]);
+        } else {
+            PoseEntry &e = m_poses[i];
+            if (e.object != object || !made_from(e.from, e.axis, t, map[k]->axis)) {
+                e.object = object;
+                keep_source(e.from, t);
+                e.axis = map[k]->axis;
+                e.status = minko_pose(t, *map[k], &e.pose);
+            }
+            st = e.status;
+            *out[k] = &e.pose;
+        }
+        if (st != MK_OK) return st;
+    }
+    return MK_OK;
 }
 
 bool set_narrowphase(btCollisionWorld *world, Backend b)
