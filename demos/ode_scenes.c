@@ -650,6 +650,7 @@ static void contact_pair(sim *s, dGeomID o1, dGeomID o2, int late)
     dContact c[MAX_CONTACTS];
     dBodyID b1 = dGeomGetBody(o1), b2 = dGeomGetBody(o2);
     int i, n;
+    if (!b1 && !b2) return; /* two static geoms (the mixed pit's walls meet at its corners): no joint could act, and their 1 m overlap was the depth column */
     if (b1 && b2 && dAreConnectedExcluding(b1, b2, dJointTypeContact)) return;
     n = s->be->collide(o1, o2, s->sc->max_contacts, &c[0].geom, (int)sizeof(dContact));
     if (compare_contacts && s->be->collide != dCollide) compare_pair(s, o1, o2, c, n);
