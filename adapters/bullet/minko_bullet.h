@@ -86,8 +86,8 @@ mk_status minko_pose(const btTransform &world, const ShapeMap &map, mk_pose *out
 // boxes, as Dbvt's leaves are: a proxy is filed as Bullet's AABB grown by
 // `margin` on every side (default gDbvtMargin, Dbvt's 0.05 world units) and
 // filed again only when an AABB set later leaves the filed box: grown by the
-// margin again if its AABB moved less than the margin since the previous
-// setAabb(), else tight (a fast body leaves any fat box at its next move; the
+// margin again if its AABB's lower corner moved less than the margin since
+// the previous setAabb(), else tight (a fast body leaves any fat box at its next move; the
 // margin would only give it pairs). A body that rests or jitters inside its
 // filed box costs O(1) in setAabb(), and a step in which no proxy was filed,
 // created or destroyed costs nothing in calculateOverlappingPairs(). The pair set is
@@ -151,7 +151,7 @@ private:
     }
     bool may_be_minko_static(int group, int mask) const;
     void fatten(const btVector3 &lo, const btVector3 &hi, btVector3 &fat_lo, btVector3 &fat_hi) const;
-    bool slow(const Proxy *p, const btVector3 &lo, const btVector3 &hi) const;
+    bool slow(const Proxy *p, const btVector3 &lo) const;
 
     mk_bp *m_bp = nullptr;
     mk_bp_kind m_kind;
