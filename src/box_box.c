@@ -10,20 +10,21 @@
  * relative pose is built once, the 15 axes are tested in closed form
  * (inlined), and a face axis clips the incident face in the reference
  * face's own 2D coordinates, where the reference face is the rectangle
- * |u| <= h_u, |v| <= h_v: a side test is one subtraction, only u and v
- * (and the height along the normal) are interpolated, and a side no
- * incident corner is outside of is skipped, so an incident face wholly
- * inside costs no pass at all. The candidates are reduced to four in those
- * coordinates (mk_mf_pick4) and written straight into the mk_manifold, each
- * with two matrix-vector products. The clip is the general Sutherland-
- * Hodgman clip of clip.c specialised, not a new idea: the same side order,
- * slop rule, crossing names and candidate order, so the manifold and its
- * feature IDs are those of the general path (tests/test_clip.c compares
- * the clips on random, stacked and rounded pairs, tests/test_box_box.c
- * whole manifolds, cold and warm). Where the instructions go is in
- * minko/manifold.h; the Sutherland-Hodgman passes, which copy every kept
- * vertex once per cutting side, and SAT's nine edge axes are the largest
- * parts. */
+ * |u| <= h_u, |v| <= h_v. The clip takes no side passes (clip_exact):
+ * the incident corners inside, the crossings of incident edges with the
+ * sides, the reference corners inside the incident face, each computed
+ * once from the four corners. Only where the clip slop decides (a corner
+ * in a side's slop strip) or round-off could (a point within it of a side
+ * or an edge) do the Sutherland-Hodgman passes of clip.c's general clip,
+ * specialised here (clip_strip), answer instead; both give the general
+ * clip's points with its feature IDs, listed in one fixed order of the
+ * features (rank()), which the reduction's preference for earlier
+ * candidates follows. The candidates are reduced to four in the face's
+ * coordinates (mk_mf_pick4) and written straight into the mk_manifold,
+ * each with two matrix-vector products (tests/test_clip.c compares the
+ * clips with the general one on random, stacked and rounded pairs,
+ * tests/test_box_box.c whole manifolds, cold and warm). Where the
+ * instructions go is in minko/manifold.h. */
 #include <string.h>
 
 #include "manifold_internal.h"
@@ -138,8 +139,9 @@ MK_ALWAYS_INLINE void put(mk_manifold *out, int i, mk_vec3 nw, mk_vec3 la, mk_ve
     c->local_b = lb;
     c->depth = depth;
     c->features = features;
-    c->flags = depth < 0 ? MK_CONTACT_SPECULATIVE : 0;
+    c->flags = (uint32_t)(depth < 0) * MK_CONTACT_SPECULATIVE;
 }
+
 
 /* Entry (row x, column c) of R (column c = B's axis c in A's frame). */
 MK_ALWAYS_INLINE mk_real rc(const mk_mat3 *R, int x, int c)
@@ -148,19 +150,226 @@ MK_ALWAYS_INLINE mk_real rc(const mk_mat3 *R, int x, int c)
     return x == 0 ? col->x : x == 1 ? col->y : col->z;
 }
 
+/* The clip's candidates in the reference face's coordinates (u, v as
+ * bb_vert's x[0], x[1]; z along the face's axis), each with its key:
+ * reference feature << 16 | incident feature. They are kept in ascending
+ * key order, a fixed order of the features (reference corners, then
+ * crossings by reference side and incident edge, then incident corners),
+ * so the reduction's preference for earlier candidates does not depend on
+ * how the clip got them. */
+typedef struct bb_cand {
+    mk_real u[MK_BB_CLIP_MAX], v[MK_BB_CLIP_MAX], z[MK_BB_CLIP_MAX];
+    uint32_t key[MK_BB_CLIP_MAX];
+} bb_cand;
+
+#define KEY(fref, finc) ((uint32_t)(fref) << 16 | (uint32_t)(finc))
+
+MK_ALWAYS_INLINE void cand(bb_cand *o, int i, mk_real u, mk_real v, mk_real z, uint32_t key)
+{
+    o->u[i] = u, o->v[i] = v, o->z[i] = z, o->key[i] = key;
+}
+
+/* The incident face in the reference face's coordinates: its centre c,
+ * half axes a1 and a2 (u, v, z each), its corners in box_face_corner order
+ * of its face fi (index 4 repeats 0). */
+typedef struct bb_inc {
+    mk_real c[3], a1[3], a2[3];
+    mk_real u[5], v[5], z[5];
+    int fi;
+} bb_inc;
+
+/* Canonical sides s of the reference rectangle: 0 +u, 1 +v, 2 -u, 3 -v;
+ * canonical corner s lies between sides s and s + 1. Per parity of the
+ * reference face, side s is its side q = side_q[.][s] (side_axis,
+ * side_sign) and corner s its corner q = corner_q[.][s] (box_face_corner
+ * order: corner q lies between sides q - 1 and q). */
+static const unsigned char side_q[2][4] = {{1, 0, 3, 2}, {1, 2, 3, 0}};
+static const unsigned char corner_q[2][4] = {{1, 0, 3, 2}, {2, 3, 0, 1}};
+
+/* Position of feature index f in a face's list of four (4: none). */
+static int position(const unsigned char *list, int f)
+{
+    int i = 0;
+    while (i < 4 && list[i] != f) ++i;
+    return i;
+}
+
+/* The order the clip's candidates come in, which the reduction's
+ * preference for earlier ones follows: reference corners by canonical
+ * corner, crossings by incident edge (box_face_edge order of the incident
+ * face fi) then canonical side, incident corners (box_face_corner order);
+ * anything else (the strip rule's rare names) last. */
+static int rank(int face, int fi, mk_feature fref, mk_feature finc)
+{
+    static const unsigned char side_s[2][4] = {{1, 0, 3, 2}, {3, 0, 1, 2}}, corner_s[2][4] = {{1, 0, 3, 2}, {2, 3, 0, 1}};
+    int r = MK_FEATURE_GET_INDEX(fref), c = MK_FEATURE_GET_INDEX(finc), q;
+    if (MK_FEATURE_TYPE(fref) == MK_FEATURE_VERTEX && finc == F(fi)) {
+        q = position(mk_box_face_corner_[face], r);
+        return q < 4 ? corner_s[face & 1][q] : 24;
+    }
+    if (MK_FEATURE_TYPE(fref) == MK_FEATURE_EDGE && MK_FEATURE_TYPE(finc) == MK_FEATURE_EDGE) {
+        int i = position(mk_box_face_edge_[fi], c);
+        q = position(mk_box_face_edge_[face], r);
+        return i < 4 && q < 4 ? 4 + 4 * i + side_s[face & 1][q] : 24;
+    }
+    if (fref == F(face) && MK_FEATURE_TYPE(finc) == MK_FEATURE_VERTEX) {
+        q = position(mk_box_face_corner_[fi], c);
+        return q < 4 ? 20 + q : 24;
+    }
+    return 24;
+}
+
+/* The rule of the slop strip: the Sutherland-Hodgman passes above, one per
+ * side some corner is outside of; the candidates then sorted by key.
+ * Taken only when some point falls in a strip or within round-off of a
+ * side (clip_exact says when), so it may be slow. */
+static MK_NOINLINE int clip_strip(int face, const bb_inc *in, const mk_real *hf, mk_real slop, bb_cand *o)
+{
+    bb_vert buf[2][MK_BB_CLIP_MAX + 1];
+    mk_real lo[2], hi[2];
+    mk_feature finc_face = F(in->fi);
+    int cnt = 4, cur = 0, i, q, rk[MK_BB_CLIP_MAX];
+    for (i = 0; i < 4; ++i) {
+        bb_vert *v = &buf[0][i];
+        v->x[0] = in->u[i], v->x[1] = in->v[i], v->z = in->z[i];
+        v->fref = F(face);
+        v->finc = V(mk_box_face_corner_[in->fi][i]);
+        v->ref_edge = -1;
+        v->edge = E(mk_box_face_edge_[in->fi][i]);
+    }
+    buf[0][4] = buf[0][0];
+    lo[0] = mk_min(mk_min(in->u[0], in->u[1]), mk_min(in->u[2], in->u[3]));
+    hi[0] = mk_max(mk_max(in->u[0], in->u[1]), mk_max(in->u[2], in->u[3]));
+    lo[1] = mk_min(mk_min(in->v[0], in->v[1]), mk_min(in->v[2], in->v[3]));
+    hi[1] = mk_max(mk_max(in->v[0], in->v[1]), mk_max(in->v[2], in->v[3]));
+    /* A side no corner is outside of (by more than its slop, m->slop times
+     * the side's length, as clip.c's side_planes sets it) cuts nothing, and
+     * no crossing made by another side is outside it either: skipped. */
+    for (q = 0; q < 4 && cnt > 0; ++q) {
+        int ax = side_axis(q);
+        mk_real sg = side_sign(face, q), side_slop = 2 * slop * hf[1 - ax];
+        if (!((sg > 0 ? hi[ax] : -lo[ax]) - hf[ax] <= side_slop))
+            cnt = clip_side(face, q, finc_face, sg, ax, hf[ax], side_slop, buf[cur], cnt, buf[cur ^ 1]), cur ^= 1;
+    }
+    /* Into clip_exact's order (insertion sort by rank, stable). */
+    for (i = 0; i < cnt; ++i) {
+        const bb_vert *v = &buf[cur][i];
+        int j, r = rank(face, in->fi, v->fref, v->finc);
+        for (j = i; j > 0 && rk[j - 1] > r; --j) {
+            rk[j] = rk[j - 1];
+            cand(o, j, o->u[j - 1], o->v[j - 1], o->z[j - 1], o->key[j - 1]);
+        }
+        rk[j] = r;
+        cand(o, j, v->x[0], v->x[1], v->z, KEY(v->fref, v->finc));
+    }
+    return cnt;
+}
+
+/* The crossing of incident edge i with the side line u = c (cross_u) or
+ * v = c (cross_v), appended as candidate n when the other coordinate is
+ * within its side's half size h (+ slop s). Returns the new count, or -1
+ * when that coordinate lies in the slop strip or within round-off of h
+ * (its position along the side is ill-conditioned by the edge's slope). */
+MK_ALWAYS_INLINE int cross_at(const mk_real *x, const mk_real *y, const mk_real *z, int i, mk_real c, mk_real h, mk_real s, mk_real tol, int n,
+                              int along_v, uint32_t key, bb_cand *o)
+{
+    mk_real dx = x[i + 1] - x[i], dy = y[i + 1] - y[i], t = (c - x[i]) / dx, yo = y[i] + dy * t, e = mk_fabs_(yo) - h;
+    mk_real lim = tol * (1 + mk_fabs_(dy / dx));
+    if (e > s + lim) return n;
+    if (e > -lim) return -1;
+    if (along_v) cand(o, n, c, yo, z[i] + (z[i + 1] - z[i]) * t, key);
+    else cand(o, n, yo, c, z[i] + (z[i + 1] - z[i]) * t, key);
+    return n + 1;
+}
+
+/* Reference corner (ru, rv) inside the incident face? Its coordinates in
+ * the face's half axes, times det, must both be below |det| (ad); -1
+ * within round-off (band) of an edge. Appended as candidate n. */
+MK_ALWAYS_INLINE int ref_corner(const bb_inc *in, mk_real ru, mk_real rv, mk_real det, mk_real ad, mk_real band, int n, uint32_t key, bb_cand *o)
+{
+    mk_real du = ru - in->c[0], dv = rv - in->c[1];
+    mk_real al = du * in->a2[1] - dv * in->a2[0], be = in->a1[0] * dv - in->a1[1] * du;
+    mk_real ea = mk_fabs_(al) - ad, eb = mk_fabs_(be) - ad;
+    if (ea > band || eb > band) return n;
+    if (ea > -band || eb > -band) return -1;
+    cand(o, n, ru, rv, in->c[2] + (al * in->a1[2] + be * in->a2[2]) / det, key);
+    return n + 1;
+}
+
+/* The clip of the incident face against the reference rectangle |u| <=
+ * hu, |v| <= hv without side passes, each point computed once from the
+ * corners: the reference corners inside the incident face, the crossings
+ * of the incident edges with the sides that lie within the other two
+ * sides, the incident corners inside (the order of rank()). These are the
+ * points of the passes (the polygon they leave is the same), unless a
+ * corner lies in a side's slop strip (su, sv: outside by at most that
+ * much), where the passes keep it in place of the crossings, or a
+ * crossing or a reference corner lies within round-off (tol, absolute)
+ * of a side or an incident edge, where the passes' order of rounding
+ * decides: then -1, and clip_strip answers. */
+MK_ALWAYS_INLINE int clip_exact(int face, const bb_inc *in, mk_real hu, mk_real hv, mk_real su, mk_real sv, mk_real tol, bb_cand *o)
+{
+    const unsigned char *ic = mk_box_face_corner_[in->fi];
+    int oc[5], all = 0, n = 0, i;
+    /* Outcodes: bit s set when the corner is beyond side s by more than its slop. */
+    for (i = 0; i < 4; ++i) {
+        mk_real eu = mk_fabs_(in->u[i]) - hu, ev = mk_fabs_(in->v[i]) - hv;
+        int c = 0;
+        if (eu > 0) {
+            if (!(eu > su)) return -1;
+            c = in->u[i] > 0 ? 1 : 4;
+        }
+        if (ev > 0) {
+            if (!(ev > sv)) return -1;
+            c |= in->v[i] > 0 ? 2 : 8;
+        }
+        oc[i] = c;
+        all |= c;
+    }
+    if (all) {
+        const unsigned char *fe = mk_box_face_edge_[face], *ie = mk_box_face_edge_[in->fi], *sq = side_q[face & 1];
+        int both = all & (all >> 1 | all << 3) & 15;
+        oc[4] = oc[0];
+        /* Reference corner s can be inside only when some incident corners
+         * are beyond both its sides, s and s + 1. */
+        if (both) {
+            const unsigned char *fc = mk_box_face_corner_[face], *cq = corner_q[face & 1];
+            mk_real det = in->a1[0] * in->a2[1] - in->a1[1] * in->a2[0], ad = mk_fabs_(det);
+            mk_real band = tol * (mk_fabs_(in->a1[0]) + mk_fabs_(in->a1[1]) + mk_fabs_(in->a2[0]) + mk_fabs_(in->a2[1]));
+            uint32_t kf = F(in->fi);
+            if ((both & 1) && (n = ref_corner(in, hu, hv, det, ad, band, n, KEY(V(fc[cq[0]]), kf), o)) < 0) return -1;
+            if ((both & 2) && (n = ref_corner(in, -hu, hv, det, ad, band, n, KEY(V(fc[cq[1]]), kf), o)) < 0) return -1;
+            if ((both & 4) && (n = ref_corner(in, -hu, -hv, det, ad, band, n, KEY(V(fc[cq[2]]), kf), o)) < 0) return -1;
+            if ((both & 8) && (n = ref_corner(in, hu, -hv, det, ad, band, n, KEY(V(fc[cq[3]]), kf), o)) < 0) return -1;
+        }
+        for (i = 0; i < 4; ++i) {
+            int x = oc[i] ^ oc[i + 1];
+            uint32_t ke = E(ie[i]);
+            if (!x) continue;
+            if ((x & 1) && (n = cross_at(in->u, in->v, in->z, i, hu, hv, sv, tol, n, 1, KEY(E(fe[sq[0]]), ke), o)) < 0) return -1;
+            if ((x & 2) && (n = cross_at(in->v, in->u, in->z, i, hv, hu, su, tol, n, 0, KEY(E(fe[sq[1]]), ke), o)) < 0) return -1;
+            if ((x & 4) && (n = cross_at(in->u, in->v, in->z, i, -hu, hv, sv, tol, n, 1, KEY(E(fe[sq[2]]), ke), o)) < 0) return -1;
+            if ((x & 8) && (n = cross_at(in->v, in->u, in->z, i, -hv, hu, su, tol, n, 0, KEY(E(fe[sq[3]]), ke), o)) < 0) return -1;
+        }
+    }
+    for (i = 0; i < 4; ++i)
+        if (!oc[i]) cand(o, n++, in->u[i], in->v[i], in->z[i], KEY(F(face), V(ic[i])));
+    return n;
+}
+
 /* The clip of mk_box_box_clip (see manifold_internal.h), with the
  * reference box, the face and `reduce` constant where it is inlined;
  * returns the count and writes the points as `o` says. */
 MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_real margin, int reduce, const bb_out *o)
 {
     const mk_shape *ref = ref_is_a ? p->a : p->b, *inc = ref_is_a ? p->b : p->a;
-    mk_real m[3][3], tr[3], hh[3], g[3], hf[2], lo[2], hi[2], rr = p->a->radius + p->b->radius;
+    mk_real m[3][3], tr[3], hh[3], g[3], hf[2], rr = p->a->radius + p->b->radius, tol;
     mk_real sgn = face & 1 ? 1 : -1, gs;
     mk_real x[MK_BB_CLIP_MAX], y[MK_BB_CLIP_MAX], depth[MK_BB_CLIP_MAX];
-    bb_vert buf[2][MK_BB_CLIP_MAX + 1];
     static const unsigned char next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
-    int k = face >> 1, iu = next[k], iv = prev[k], ia, ju, jv, fi, i, q, cnt = 4, cur = 0, n = 0, idx[MK_BB_CLIP_MAX], pick[MK_BB_CLIP_MAX];
-    mk_feature finc_face;
+    int k = face >> 1, iu = next[k], iv = prev[k], ia, ju, jv, i, cnt, n = 0, idx[MK_BB_CLIP_MAX], pick[MK_BB_CLIP_MAX];
+    bb_inc in;
+    bb_cand cd;
     /* The incident box in the reference frame: x_ref = m x_inc + tr (R and
      * t for B in A's frame, R^T and -R^T t for A in B's). */
     for (i = 0; i < 3; ++i) {
@@ -183,51 +392,33 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
         mk_real d0 = mk_fabs_(m[k][0]), d1 = mk_fabs_(m[k][1]), d2 = mk_fabs_(m[k][2]);
         ia = (d0 >= d1 && d0 >= d2) ? 0 : (d1 >= d2 ? 1 : 2);
     }
-    fi = 2 * ia + (-sgn * m[k][ia] >= 0);
-    finc_face = F(fi);
+    in.fi = 2 * ia + (-sgn * m[k][ia] >= 0);
     ju = next[ia], jv = prev[ia];
-    gs = fi & 1 ? g[ia] : -g[ia];
+    gs = in.fi & 1 ? g[ia] : -g[ia];
     /* Corners c0 -+ cu -+ cv in box_face_corner order: (-, -), (+, -),
      * (+, +), (-, +) on a + face, reversed on a - face; only the face's
      * coordinates (u, v) and the height axis (z). */
     {
-        mk_real c[3][4];
         int j;
         for (j = 0; j < 3; ++j) {
             int row = j == 0 ? iu : j == 1 ? iv : k;
             mk_real cu = m[row][ju] * g[ju], cv = m[row][jv] * g[jv], c0 = tr[row] + gs * m[row][ia], s = cu + cv, t = cu - cv;
-            c[j][0] = c0 - s, c[j][1] = c0 + t, c[j][2] = c0 + s, c[j][3] = c0 - t;
-        }
-        for (i = 0; i < 4; ++i) {
-            bb_vert *v = &buf[0][i];
-            int at = fi & 1 ? i : 3 - i;
-            v->x[0] = c[0][at], v->x[1] = c[1][at], v->z = c[2][at];
-            v->fref = F(face);
-            v->finc = V(mk_box_face_corner_[fi][i]);
-            v->ref_edge = -1;
-            v->edge = E(mk_box_face_edge_[fi][i]);
-        }
-        buf[0][4] = buf[0][0];
-        for (j = 0; j < 2; ++j) {
-            lo[j] = mk_min(mk_min(c[j][0], c[j][1]), mk_min(c[j][2], c[j][3]));
-            hi[j] = mk_max(mk_max(c[j][0], c[j][1]), mk_max(c[j][2], c[j][3]));
+            mk_real *w = j == 0 ? in.u : j == 1 ? in.v : in.z;
+            in.c[j] = c0, in.a1[j] = cu, in.a2[j] = cv;
+            if (in.fi & 1) w[0] = c0 - s, w[1] = c0 + t, w[2] = c0 + s, w[3] = c0 - t;
+            else w[0] = c0 - t, w[1] = c0 + s, w[2] = c0 + t, w[3] = c0 - s;
+            w[4] = w[0];
         }
     }
-    /* A side no corner is outside of (by more than its slop, m->slop times
-     * the side's length, as clip.c's side_planes sets it) cuts nothing, and
-     * no crossing made by another side is outside it either: skipped. */
-    for (q = 0; q < 4 && cnt > 0; ++q) {
-        int ax = side_axis(q);
-        mk_real sg = side_sign(face, q), side_slop = 2 * slop * hf[1 - ax];
-        if (!((sg > 0 ? hi[ax] : -lo[ax]) - hf[ax] <= side_slop))
-            cnt = clip_side(face, q, finc_face, sg, ax, hf[ax], side_slop, buf[cur], cnt, buf[cur ^ 1]), cur ^= 1;
-    }
+    /* Round-off of the corners' coordinates, far below any slop that matters. */
+    tol = 64 * MK_REAL_EPSILON * (mk_fabs_(tr[0]) + mk_fabs_(tr[1]) + mk_fabs_(tr[2]) + g[0] + g[1] + g[2] + hf[0] + hf[1]);
+    cnt = clip_exact(face, &in, hf[0], hf[1], 2 * slop * hf[1], 2 * slop * hf[0], tol, &cd);
+    if (cnt < 0) cnt = clip_strip(face, &in, hf, slop, &cd);
     /* Depths from the heights over the face; candidates beyond the margin go. */
     for (i = 0; i < cnt; ++i) {
-        const bb_vert *v = &buf[cur][i];
-        mk_real d = rr - (sgn * v->z - hh[k]);
+        mk_real d = rr - (sgn * cd.z[i] - hh[k]);
         if (!(d >= -margin)) continue;
-        x[n] = v->x[0], y[n] = v->x[1], depth[n] = d, idx[n++] = i;
+        x[n] = cd.u[i], y[n] = cd.v[i], depth[n] = d, idx[n++] = i;
     }
     if (reduce && n > MK_MANIFOLD_MAX_POINTS) {
         n = mk_mf_pick4(n, x, y, depth, pick);
@@ -235,10 +426,10 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
         for (i = 0; i < n; ++i) pick[i] = i;
     }
     for (i = 0; i < n; ++i) {
-        const bb_vert *v = &buf[cur][idx[pick[i]]];
-        mk_real c[3], w = sgn * v->z - hh[k];
-        uint32_t features = ref_is_a ? MK_FEATURE_PAIR(v->fref, v->finc) : MK_FEATURE_PAIR(v->finc, v->fref);
-        c[iu] = v->x[0], c[iv] = v->x[1], c[k] = v->z;
+        int at = idx[pick[i]];
+        mk_real c[3], w = sgn * cd.z[at] - hh[k];
+        uint32_t key = cd.key[at], features = ref_is_a ? key >> 16 | key << 16 : key;
+        c[iu] = cd.u[at], c[iv] = cd.v[at], c[k] = cd.z[at];
         if (o->m) {
             /* q is a point of the incident core. Reference A: la is q on
              * A's face pushed out by A's radius, lb = R^T (q - t) - rb
@@ -356,38 +547,27 @@ static void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, mk_real
 
 MK_ALWAYS_INLINE const mk_vec3 *column(const mk_mat3 *m, int k) { return k == 0 ? &m->c0 : k == 1 ? &m->c1 : &m->c2; }
 
-/* Edge pair hint (half-edges ea of A, eb of B) from world poses: the two
- * rows of R and entries of t that box_edge_axis reads (row i and t_i only
- * ever multiply L_i = 0: zeros), as mk_pair_of_poses_ forms them. */
-static int edge_hint_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 dp, int ea, int eb,
-                           mk_real stop, mk_sat_result *out)
+/* Separation along edge pair (e_i of A, R_j of B) straight from the world
+ * poses: the two rows of R and entries of t that box_edge_axis reads (row
+ * i and t_i only ever multiply L_i = 0: zeros), as mk_pair_of_poses_ forms
+ * them; -MK_REAL_MAX when the edges are parallel. */
+static mk_real edge_sep_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 dp, int i, int j)
 {
     mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
-    int i = mk_box_hull_edge_id(ea) / 4, j = mk_box_hull_edge_id(eb) / 4, n, k;
+    int n, k;
     box_edges best;
     for (n = 1; n < 3; ++n) {
         int row = (i + n) % 3;
-        const mk_vec3 *e = column(ra, row);
-        for (k = 0; k < 3; ++k) r[row][k] = mk_v3_dot(*e, *column(rb, k));
+        mk_vec3 e = *column(ra, row);
+        for (k = 0; k < 3; ++k) r[row][k] = mk_v3_dot(e, *column(rb, k));
         ar[row][j] = mk_fabs_(r[row][j]);
-        d[row] = mk_v3_dot(*e, dp);
+        d[row] = mk_v3_dot(e, dp);
     }
-    r[i][0] = r[i][1] = r[i][2] = d[i] = 0;
     a[0] = ha->x, a[1] = ha->y, a[2] = ha->z;
     b[0] = hb->x, b[1] = hb->y, b[2] = hb->z;
     best.sep = -MK_REAL_MAX;
     box_edge_axis(r, ar, a, b, d, i, j, MK_REAL_MAX, &best);
-    if (!(best.sep > stop)) return 0;
-    edge_result(r, d, i, j, best.sep, out);
-    out->best = best.sep;
-    out->complete = 0;
-    return 1;
-}
-
-int mk_sat_box_box_edge_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_pose *xa, const mk_pose *xb, int ia, int ib, mk_real stop,
-                              mk_sat_result *out)
-{
-    return ia >= 0 && ia < 24 && ib >= 0 && ib < 24 && edge_hint_apart(ha, hb, &xa->r, &xb->r, mk_v3_sub(xb->p, xa->p), ia, ib, stop, out);
+    return best.sep;
 }
 
 /* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
@@ -554,29 +734,28 @@ static int stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, c
     mk_sat_kind kind = (mk_sat_kind)(cache->axis - MK_MF_APART_HINT);
     mk_real rr = a->radius + b->radius;
     if (kind == MK_SAT_EDGES) {
-        mk_sat_result sat;
-        if (mk_sat_box_box_edge_apart(&a->u.half_extents, &b->u.half_extents, xa, xb, cache->reference, (int)cache->face - 1, margin + rr,
-                                      &sat) &&
-            sat.best - rr > margin) {
-            cache->reference = sat.a;
-            cache->face = (mk_feature)(sat.b + 1);
-            return 1;
+        /* The hint's half-edges name their edges' directions, all the axis
+         * depends on: kept as they are while the pair stays apart. */
+        int ea = cache->reference, eb = (int)cache->face - 1;
+        if (ea >= 0 && ea < 24 && eb >= 0 && eb < 24) {
+            mk_real sep = edge_sep_apart(&a->u.half_extents, &b->u.half_extents, &xa->r, &xb->r, mk_v3_sub(xb->p, xa->p),
+                                         mk_box_hull_edge_id(ea) / 4, mk_box_hull_edge_id(eb) / 4);
+            if (sep > margin + rr && sep - rr > margin) return 1;
         }
     } else if (kind == MK_SAT_FACE_A || kind == MK_SAT_FACE_B) {
-        int of_a = kind == MK_SAT_FACE_A, face = of_a ? cache->reference : (int)cache->face - 1, k = face / 2;
-        const mk_mat3 *own = of_a ? &xa->r : &xb->r, *other = of_a ? &xb->r : &xa->r;
-        const mk_vec3 *h = of_a ? &a->u.half_extents : &b->u.half_extents, *g = of_a ? &b->u.half_extents : &a->u.half_extents;
+        /* The axis is the face's box axis k; which of its two faces (the
+         * sign) does not change the separation, so the hint is kept as is. */
+        int of_a = kind == MK_SAT_FACE_A, face = of_a ? cache->reference : (int)cache->face - 1;
         if (face >= 0 && face < 6) {
-            const mk_vec3 *e = k == 0 ? &own->c0 : k == 1 ? &own->c1 : &own->c2;
-            mk_real d = mk_v3_dot(*e, mk_v3_sub(xb->p, xa->p));
-            mk_real sep = mk_fabs_(d) - (k == 0 ? h->x : k == 1 ? h->y : h->z) -
-                          (mk_fabs_(mk_v3_dot(*e, other->c0)) * g->x + mk_fabs_(mk_v3_dot(*e, other->c1)) * g->y +
-                           mk_fabs_(mk_v3_dot(*e, other->c2)) * g->z);
-            if (sep > margin + rr && sep - rr > margin) {
-                cache->reference = of_a ? 2 * k + (d >= 0) : -1;
-                cache->face = (mk_feature)(of_a ? 0 : 2 * k + (d < 0) + 1);
-                return 1;
-            }
+            const mk_pose *own = of_a ? xa : xb, *other = of_a ? xb : xa;
+            const mk_vec3 *h = of_a ? &a->u.half_extents : &b->u.half_extents, *g = of_a ? &b->u.half_extents : &a->u.half_extents;
+            int k = face >> 1;
+            mk_vec3 e = *column(&own->r, k);
+            mk_real hk = k == 0 ? h->x : k == 1 ? h->y : h->z;
+            mk_real sep = mk_fabs_(mk_v3_dot(e, mk_v3_sub(xb->p, xa->p))) - hk -
+                          (mk_fabs_(mk_v3_dot(e, other->r.c0)) * g->x + mk_fabs_(mk_v3_dot(e, other->r.c1)) * g->y +
+                           mk_fabs_(mk_v3_dot(e, other->r.c2)) * g->z);
+            if (sep > margin + rr && sep - rr > margin) return 1;
         }
     }
     cache->axis = cache->reference = 0;
@@ -586,7 +765,7 @@ static int stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, c
 
 /* Everything after the hint (out of line: the pair that stays apart
  * needs none of this frame). */
-static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
                                mk_manifold *out)
 {
     mk_real ra = a->radius, rb = b->radius, deepest = -MK_REAL_MAX;
@@ -595,15 +774,6 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
     mk_sat_result sat;
     mk_pair p;
     int i, count;
-    {
-        /* Bounding balls about the centres farther apart than the margin. */
-        mk_real reach = ra + mk_v3_len(ha) + rb + mk_v3_len(hb) + margin;
-        if (mk_v3_len2(mk_v3_sub(xb->p, xa->p)) > reach * reach) {
-            if (cache) cache->axis = MK_SAT_NONE;
-            none(out, mk_v3(0, 0, 1));
-            return 1;
-        }
-    }
     p = mk_pair_of_poses_(a, xa, b, xb);
     opt.stop_above = margin + ra + rb;
     opt.prefer = cache ? (mk_sat_kind)cache->axis : MK_SAT_NONE;
@@ -619,7 +789,7 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
             cache->face = (mk_feature)(sat.b + 1);
         }
         none(out, xa->r.c2);
-        return 1;
+        return MK_OK;
     }
     if (cache) cache->axis = (int)sat.kind;
     n = sat.normal;
@@ -653,31 +823,46 @@ static MK_NOINLINE int collide(const mk_shape *a, const mk_pose *xa, const mk_sh
         }
     }
 #ifndef MK_WITHOUT_GJK
-    if (sat.separation > 0 && !realised(deepest, ra + rb - sat.separation, &p)) return 0;
+    if (sat.separation > 0 && !realised(deepest, ra + rb - sat.separation, &p)) return mk_collide_gjk_(a, xa, b, xb, margin, cache, out);
 #else
     (void)deepest;
 #endif
     out->normal = nw;
     out->count = count;
+    return MK_OK;
+}
+
+/* Bounding balls about the centres farther apart than the margin: no
+ * contact, and nothing carried to the next frame. */
+MK_ALWAYS_INLINE int balls_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
+                                 mk_manifold *out)
+{
+    mk_real reach = a->radius + mk_v3_len(a->u.half_extents) + b->radius + mk_v3_len(b->u.half_extents) + margin;
+    if (!(mk_v3_len2(mk_v3_sub(xb->p, xa->p)) > reach * reach)) return 0;
+    if (cache) cache->axis = MK_SAT_NONE;
+    none(out, mk_v3(0, 0, 1));
     return 1;
 }
 
 /* A pair that was apart last frame: its axis, else the whole pass (both
  * ends tail calls, so neither path keeps the other's frame). */
-static MK_NOINLINE int hinted(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
-                              mk_manifold *out)
+static MK_NOINLINE mk_status hinted(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                                    mk_manifold_cache *cache, mk_manifold *out)
 {
     if (stay_apart(a, xa, b, xb, margin, cache)) {
         none(out, mk_v3(0, 0, 1));
-        return 1;
+        return MK_OK;
     }
+    if (balls_apart(a, xa, b, xb, margin, cache, out)) return MK_OK;
     return collide(a, xa, b, xb, margin, cache, out);
 }
 
-int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
-                       mk_manifold *out)
+mk_status mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                             mk_manifold_cache *cache, mk_manifold *out)
 {
-    return cache && cache->axis > MK_MF_APART_HINT ? hinted(a, xa, b, xb, margin, cache, out) : collide(a, xa, b, xb, margin, cache, out);
+    if (cache && cache->axis > MK_MF_APART_HINT) return hinted(a, xa, b, xb, margin, cache, out);
+    if (balls_apart(a, xa, b, xb, margin, cache, out)) return MK_OK;
+    return collide(a, xa, b, xb, margin, cache, out);
 }
 
 #endif

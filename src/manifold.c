@@ -487,9 +487,7 @@ static MK_INLINE mk_status collide_args(const mk_shape *a, const mk_pose *xa, co
                                         const mk_manifold_cache *cache)
 {
     mk_status st;
-    /* Two boxes (the common pair) are checked with their type known. */
-    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX ? !mk_shape_ok_typed_(a, MK_SHAPE_BOX) || !mk_shape_ok_typed_(b, MK_SHAPE_BOX)
-                                                          : !mk_shape_ok_typed_(a, a->type) || !mk_shape_ok_typed_(b, b->type)) {
+    if (!mk_shape_ok_typed_(a, a->type) || !mk_shape_ok_typed_(b, b->type)) {
         if ((st = mk_shape_validate(a)) != MK_OK) return st;
         return mk_shape_validate(b);
     }
@@ -500,27 +498,55 @@ static MK_INLINE mk_status collide_args(const mk_shape *a, const mk_pose *xa, co
     return MK_OK;
 }
 
-mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
-                          mk_manifold_cache *cache, mk_manifold *out)
+/* collide_args for two boxes, type known, as one test: 1 exactly when
+ * collide_args would return MK_OK (margin <= MK_REAL_MAX also rejects
+ * NaN and infinity). */
+MK_ALWAYS_INLINE int boxes_ok(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                              const mk_manifold_cache *cache)
 {
-    mk_status st;
+    return mk_shape_ok_typed_(a, MK_SHAPE_BOX) && mk_shape_ok_typed_(b, MK_SHAPE_BOX) && mk_pose_ok_(xa) && mk_pose_ok_(xb) && margin >= 0 &&
+           margin <= MK_REAL_MAX && (!cache || (unsigned)cache->mode <= (unsigned)MK_MANIFOLD_BEST_FACE);
+}
+
+/* The general path (the table's pair routine, or fn) into a reduced manifold. */
+static mk_status collide_manifold(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                                  mk_manifold_cache *cache, mk_manifold *out, pair_fn fn)
+{
     collide_out o;
-    if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
-    if ((st = collide_args(a, xa, b, xb, margin, cache)) != MK_OK) return st;
-#ifndef MK_WITHOUT_SAT
-    /* Two boxes in one pass (box_box.c); GJK when rounded cores are apart
-     * and SAT's points fall short of their distance. */
-    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX && mk_box_box_collide(a, xa, b, xb, margin, cache, out)) return MK_OK;
-#endif
     o.normal = &out->normal;
     o.points = out->points;
     o.count = &out->count;
     o.capacity = MK_MANIFOLD_MAX_POINTS;
     o.reduce = 1;
+    return collide_checked(a, xa, b, xb, margin, cache, &o, fn);
+}
+
+mk_status mk_collide_gjk_(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                          mk_manifold_cache *cache, mk_manifold *out)
+{
+    return collide_manifold(a, xa, b, xb, margin, cache, out, generic);
+}
+
+/* mk_collide_pose's checks and general path (out of line, so the two
+ * boxes' path keeps no frame). */
+static MK_NOINLINE mk_status collide_pose_general(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                                                  mk_manifold_cache *cache, mk_manifold *out)
+{
+    mk_status st;
+    if ((st = collide_args(a, xa, b, xb, margin, cache)) != MK_OK) return st;
+    return collide_manifold(a, xa, b, xb, margin, cache, out, NULL);
+}
+
+mk_status mk_collide_pose(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                          mk_manifold_cache *cache, mk_manifold *out)
+{
+    if (!a || !xa || !b || !xb || !out) return MK_ERR_NULL;
 #ifndef MK_WITHOUT_SAT
-    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX) return collide_checked(a, xa, b, xb, margin, cache, &o, generic);
+    /* Two boxes in one pass (box_box.c), reached by a tail call. */
+    if (a->type == MK_SHAPE_BOX && b->type == MK_SHAPE_BOX && boxes_ok(a, xa, b, xb, margin, cache))
+        return mk_box_box_collide(a, xa, b, xb, margin, cache, out);
 #endif
-    return collide_checked(a, xa, b, xb, margin, cache, &o, NULL);
+    return collide_pose_general(a, xa, b, xb, margin, cache, out);
 }
 
 /* Box pairs come reduced from box_box.c: their manifold is copied. */

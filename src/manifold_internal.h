@@ -199,7 +199,7 @@ static inline mk_real mk_mf_edge_contact(const mk_pair *p, int ea, int eb, mk_re
 /* ---- two boxes (box_box.c) ---- */
 
 /* Most candidates of a box face clip (4 corners, at most one more per side
- * pass; room to spare for round-off). */
+ * pass; 4 + 8 + 4 when counted by kind). */
 #define MK_BB_CLIP_MAX 16
 
 /* A candidate of a box-face clip: the incident core point q in the
@@ -216,20 +216,26 @@ typedef struct mk_bb_point {
  * face of the other box, done in the reference face's 2D coordinates: the
  * candidates mk_mf_clip would give for mk_box_face against the
  * mk_support_feature of the other box along the face's normal, with the
- * same IDs, in the same order, clip slop `slop` (a fraction of the
- * reference side), those deeper than -margin; with `reduce`, the four
- * mk_mf_pick4 keeps in the face's coordinates. Returns the count. */
+ * same IDs, clip slop `slop` (a fraction of the reference side), those
+ * deeper than -margin, in box_box.c's fixed order of the features
+ * (reference corners, crossings by incident edge then reference side,
+ * incident corners; tests/support/clip_order.h); with `reduce`, the four
+ * mk_mf_pick4 keeps of them in the face's coordinates. Returns the count. */
 int mk_box_box_clip(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_real margin, int reduce, mk_bb_point *out);
 
 /* mk_collide_pose of two boxes after its checks, in one pass: last
  * frame's separating axis, the bounding balls, the relative pose, the 15
  * SAT axes with the face/edge hysteresis, then for a face axis
  * mk_box_box_clip reduced to four, for an edge pair the edges' closest
- * points; the result written straight into *out, the cache updated.
- * Returns 1 when done, 0 when rounded cores are apart and SAT's points do
- * not realise their distance: the caller then asks GJK (*out is then
- * undefined, the cache already updated as the general path expects). */
-int mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
-                       mk_manifold *out);
+ * points; the result written straight into *out, the cache updated. When
+ * rounded cores are apart and SAT's points do not realise their distance,
+ * the answer is mk_collide_gjk_'s. */
+mk_status mk_box_box_collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                             mk_manifold_cache *cache, mk_manifold *out);
+
+/* mk_collide_pose's general GJK/EPA path for a checked pair (manifold.c);
+ * MK_ERR_UNSUPPORTED in a build without GJK. */
+mk_status mk_collide_gjk_(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin,
+                          mk_manifold_cache *cache, mk_manifold *out);
 
 #endif

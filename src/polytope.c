@@ -21,7 +21,7 @@ static const uint16_t box_adjacency[9 + 24 + 6] = {
     1, 2, 4,  0, 3, 5,  3, 0, 6,  2, 1, 7,  5, 6, 0,  4, 7, 1,  7, 4, 2,  6, 5, 3,
     1, 0, 2, 0, 4, 0,
 };
-static const unsigned char box_edge_id[24] = {6, 10, 4, 8, 5, 11, 7, 9, 9, 2, 8, 0, 10, 3, 11, 1, 1, 5, 0, 4, 2, 7, 3, 6};
+const unsigned char mk_box_edge_id_[24] = {6, 10, 4, 8, 5, 11, 7, 9, 9, 2, 8, 0, 10, 3, 11, 1, 1, 5, 0, 4, 2, 7, 3, 6};
 
 void mk_box_hull_init(mk_box_hull *b, mk_vec3 h)
 {
@@ -53,4 +53,3 @@ void mk_box_hull_init(mk_box_hull *b, mk_vec3 h)
     x->bytes = 0;
 }
 
-int mk_box_hull_edge_id(int half_edge) { return box_edge_id[half_edge]; }

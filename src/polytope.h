@@ -24,6 +24,7 @@ typedef struct mk_box_hull {
 /* half_extents must be positive; the view must not be copied (hull points into it). */
 void mk_box_hull_init(mk_box_hull *b, mk_vec3 half_extents);
 /* Box edge ID (minko/manifold.h) of box half-edge 0..23. */
-int mk_box_hull_edge_id(int half_edge);
+extern const unsigned char mk_box_edge_id_[24];
+static inline int mk_box_hull_edge_id(int half_edge) { return mk_box_edge_id_[half_edge]; }
 
 #endif

@@ -74,7 +74,7 @@ typedef struct mk_sat_options {
      * without it. MK_SAT_NONE (the default): none. mk_sat only:
      * mk_sat_box_box ignores it, as two boxes test last frame's axis from
      * their world poses before any relative pose is built (box_box.c's
-     * stay_apart, mk_sat_box_box_edge_apart). */
+     * stay_apart). */
     mk_sat_kind first;
     int first_a, first_b;
 } mk_sat_options;
@@ -140,17 +140,5 @@ void mk_sat(const mk_hull *a, const mk_hull *b, const mk_mat3 *R, mk_vec3 t, con
  * (edges as the lower half-edge of the box view); opt->first is not read
  * (see mk_sat_options). */
 void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out);
-
-/* The separation of boxes of half-extents ha and hb along one edge pair
- * (half-edges ia of A and ib of B, as mk_sat_box_box names them), from
- * their two world poses before any relative pose is built: only the two
- * rows of R and entries of t the axis needs (last frame's separating axis,
- * as mk_sat_options.first is for mk_sat). Returns 1 with *out filled as
- * mk_sat_box_box reports an edge pair (kind, indices, normal, separation;
- * best = separation, complete = 0) when the boxes separate along it by
- * more than stop; else 0 (*out untouched). The face axes' twin of this is
- * box_box.c's stay_apart. */
-int mk_sat_box_box_edge_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_pose *xa, const mk_pose *xb, int ia, int ib, mk_real stop,
-                              mk_sat_result *out);
 
 #endif
