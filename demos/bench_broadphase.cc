@@ -15,13 +15,16 @@
 // caches and the allocator's thresholds are warm for all, not only for those
 // that come after the first); each repetition then runs every backend with
 // budget left, one after another, each from a fresh setup, in an order
-// shuffled afresh (fixed seed), so no backend always follows the same one; a
-// backend's figure is the median frame of each repetition, the best (lowest)
-// of those medians over the repetitions. On a shared machine load comes in
-// bursts about as long as one backend's whole run (tens of ms): with two or
-// three repetitions a burst decided a row, and two rows of one structure read
-// up to 30 % apart; the best of many repetitions is the quiet figure (the
-// cheap backends get all of them, the slow ones as many as --budget allows).
+// shuffled afresh (fixed seed), so no backend always follows the same one.
+// Every repetition replays the same frames, so each frame's best time over
+// the repetitions is its cost on a quiet machine; a backend's figure is the
+// median over frames of those bests. On a shared machine load comes in
+// bursts, and a busy neighbour on the other hardware thread slows CPU time
+// too: the figure used before (the best over repetitions of each one's
+// median frame) needed a whole run (up to 40 frames, hundreds of ms at
+// 100k) to be quiet, and two rows of one structure read up to 40 % apart;
+// a frame needs only one quiet repetition of its own. The cheap backends
+// get every repetition, the slow ones as many as --budget allows.
 // Frames are not interleaved across backends: every frame would then start
 // with caches full of the other backends' data, and the rows of one
 // structure still disagreed by 10 % (measured). Freed memory stays in the
@@ -464,7 +467,7 @@ static size_t heap_in_use() { struct mallinfo2 mi = mallinfo2(); return mi.uordb
 struct Result {
     std::string backend, note;
     std::vector<double> ms, cpu;   // per frame, one repetition
-    std::vector<double> rep_ms, rep_cpu; // the median frame of each repetition
+    std::vector<double> best_ms, best_cpu; // per frame, the best over the repetitions
     long missing = 0, extra = 0, frames = 0;
     double cand_sum = 0;
     double bytes_per_proxy = 0, own_bytes_per_proxy = -1;
@@ -474,10 +477,16 @@ struct Result {
         std::sort(v.begin(), v.end());
         return v[v.size() / 2];
     }
-    static double best_of(const std::vector<double> &v) { return v.empty() ? NAN : *std::min_element(v.begin(), v.end()); }
-    // The figure quoted for every backend: best over repetitions of the median frame.
-    double median() const { return best_of(rep_ms); }
-    double cpu_median() const { return best_of(rep_cpu); }
+    // Keeps in best[i] the lowest time frame i has taken in any repetition.
+    static void keep_best(std::vector<double> &best, const std::vector<double> &v) {
+        for (size_t i = 0; i < v.size(); ++i)
+            if (i >= best.size()) best.push_back(v[i]);
+            else best[i] = std::min(best[i], v[i]);
+    }
+    // The figure quoted for every backend: the median over frames of each
+    // frame's best time over the repetitions.
+    double median() const { return median_of(best_ms); }
+    double cpu_median() const { return median_of(best_cpu); }
 };
 
 static Backend *make_backend(int b)
@@ -605,7 +614,7 @@ int main(int argc, char **argv)
     mallopt(M_TRIM_THRESHOLD, INT32_MAX);
     dInitODE2(0);
     int bad = 0;
-    std::printf("broadphase: ms per frame (update + pair set): the median frame of each repetition, best of %d repetition(s);\n"
+    std::printf("broadphase: ms per frame (update + pair set): the median over frames of each frame's best of %d repetition(s);\n"
                 "every backend warmed once untimed, order shuffled per repetition;\n"
                 "ratio = backend cpu / minko.auto cpu (thread CPU time: the machine is shared, wall time is noisier)\n", reps);
     for (const Plan &p : plan) {
@@ -647,7 +656,8 @@ int main(int argc, char **argv)
                 acc.backend = r.backend;
                 acc.note = r.note;
                 acc.failed |= r.failed;
-                if (!r.ms.empty()) { acc.rep_ms.push_back(Result::median_of(r.ms)); acc.rep_cpu.push_back(Result::median_of(r.cpu)); }
+                Result::keep_best(acc.best_ms, r.ms);
+                Result::keep_best(acc.best_cpu, r.cpu);
                 acc.missing += r.missing; acc.extra += r.extra; acc.frames += r.frames; acc.cand_sum += r.cand_sum;
                 acc.bytes_per_proxy = r.bytes_per_proxy;
                 acc.own_bytes_per_proxy = r.own_bytes_per_proxy;

@@ -123,8 +123,11 @@ const Backend kBackends[] = {
 };
 const int kBackendCount = (int)(sizeof kBackends / sizeof kBackends[0]);
 
-// Which Minko broadphase structure the minko backends use (--bp).
+// Which Minko broadphase structure the minko backends use (--bp), and how
+// far its filed boxes reach past Bullet's AABBs (--bp-margin; default
+// Dbvt's gDbvtMargin).
 mk_bp_kind g_bp_kind = MK_BP_AUTO;
+btScalar g_bp_margin = gDbvtMargin;
 // The penetration referee runs (--no-referee leaves it out, for profiling).
 bool g_referee = true;
 
@@ -143,7 +146,7 @@ struct Pipeline {
         if (b.minko_narrowphase) config = minko_config = new mkb::CollisionConfiguration(mkb::Backend::minko);
         else config = new btDefaultCollisionConfiguration();
         dispatcher = new btCollisionDispatcher(config);
-        if (b.minko_broadphase) broadphase = new mkb::Broadphase(g_bp_kind);
+        if (b.minko_broadphase) broadphase = new mkb::Broadphase(g_bp_kind, nullptr, 1024, g_bp_margin);
         else broadphase = new btDbvtBroadphase();
         solver = new btSequentialImpulseConstraintSolver();
         if (b.minko_ccd) {
@@ -1025,7 +1028,8 @@ void usage(const char *argv0)
                  "               from the second on; every figure is the median over the trials, and\n"
                  "               a second table gives stability metrics as mean+-sd with a verdict vs native\n"
                  "  --per-trial  also print every trial's row (backend#trial; the table only)\n"
-                 "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n",
+                 "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n"
+                 "  --bp-margin M  how far Minko's filed boxes reach past Bullet's AABBs (default 0.05, Dbvt's)\n",
                  argv0);
 }
 
@@ -1052,6 +1056,8 @@ int main(int argc, char **argv)
         else if (a == "--bp" && i + 1 < argc) {
             std::string k = argv[++i];
             g_bp_kind = k == "sap" ? MK_BP_SAP : k == "hgrid" ? MK_BP_HGRID : k == "brute" ? MK_BP_BRUTE : MK_BP_AUTO;
+        } else if (a == "--bp-margin" && i + 1 < argc) {
+            g_bp_margin = (btScalar)std::atof(argv[++i]);
         }
         else {
             usage(argv[0]);

@@ -13,6 +13,14 @@
  * backend of each case.
  *
  *   ode_scenes [--quick] [--json FILE] [--scene NAME] [--reps N] [--poses FILE] [--frames A:B] [--per-frame FILE]
+ *              [--backend NAME] [--steps N] [--start F] [--compare]
+ *
+ * --backend and --steps run one backend for N steps (short runs under
+ * callgrind: --toggle-collect=mk_ode_space_collide or dSpaceCollide then
+ * splits a running simulation's space collide per function); --start F
+ * (with --poses FILE, the stress scene only) starts the stress heap from
+ * the recorded poses of frame F at rest, so that the settled heap's frames
+ * run without the minutes its first frames take. --compare: see compare_pair.
  *
  * Per case and backend: median ms per step (space collide, colliders = the
  * near-callback pass incl. contact joints, total incl. QuickStep), candidate
@@ -57,10 +65,15 @@ static double rng_unit(rng *r) /* splitmix64, uniform in [0, 1) */
 }
 static double rng_range(rng *r, double lo, double hi) { return lo + (hi - lo) * rng_unit(r); }
 
+/* The thread's CPU time: on a shared machine a preemption adds a whole
+ * scheduler tick (4 ms here) to whichever backend's step it hits, and once
+ * more than half of the steps are hit, the medians of a running simulation
+ * measure the ticks (ratios between backends drift towards 1). Cache misses
+ * caused by the other processes still count. */
 static double now_ms(void)
 {
     struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
     return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
 }
 
@@ -256,6 +269,16 @@ typedef struct scene {
 
 typedef struct pair { uint32_t a, b; } pair;
 
+/* Poses of every body, frame by frame: position then quaternion (7 dReal). */
+typedef struct recording { int nbodies, frames; dReal *pose; } recording;
+
+/* --backend, --steps, --start (see the top of the file). */
+static const char *only_backend;
+static int steps_override;
+static int start_frame;
+static recording start_rec; /* frames of --poses, read for --start */
+static int compare_contacts;
+
 typedef struct sim {
     const backend *be;
     const scene *sc;
@@ -276,6 +299,7 @@ typedef struct sim {
     long long substeps;               /* QuickSteps run (more than steps when split at times of impact) */
     int substep_cap;                  /* steps whose split stopped at MAX_SUBSTEPS */
     double max_depth_late, ground_pen_late;
+    struct contact_diff *diff; /* --compare: per class pair, Minko's contacts against dCollide's on the same poses */
 } sim;
 
 static uint32_t geom_id(dGeomID g) { return (uint32_t)(uintptr_t)dGeomGetData(g); }
@@ -568,6 +592,59 @@ static int cmp_pair(const void *x, const void *y)
 #define MAX_CONTACTS 16
 #define BIG_STEP_CONTACTS 100000
 
+/* --compare: for a backend with Minko's narrowphase, every pair is also
+ * handed to dCollide on the same poses (outside the simulation: only its
+ * answer is kept, and the timings then include it). Per pair of ODE classes:
+ * the pairs where the two disagree on the contact count, on whether there is
+ * a contact, on the deepest depth (beyond 1e-4 m + 1 %), or on the deepest
+ * contact's normal (more than 2.6 degrees apart). */
+#define DIFF_CLASSES 16
+typedef struct contact_diff { long long pairs, count, presence, depth, normal; } contact_diff;
+
+static const dContactGeom *deepest(const dContact *c, int n)
+{
+    const dContactGeom *d = NULL;
+    int i;
+    for (i = 0; i < n; i++)
+        if (!d || c[i].geom.depth > d->depth) d = &c[i].geom;
+    return d;
+}
+
+static void compare_pair(sim *s, dGeomID o1, dGeomID o2, const dContact *c, int n)
+{
+    dContact r[MAX_CONTACTS];
+    int c1 = dGeomGetClass(o1), c2 = dGeomGetClass(o2), nr;
+    contact_diff *d;
+    if (c1 >= DIFF_CLASSES || c2 >= DIFF_CLASSES) return;
+    if (!s->diff) s->diff = calloc(DIFF_CLASSES * DIFF_CLASSES, sizeof *s->diff);
+    if (!s->diff) return;
+    nr = dCollide(o1, o2, s->sc->max_contacts, &r[0].geom, (int)sizeof(dContact));
+    d = &s->diff[(c1 < c2 ? c1 : c2) * DIFF_CLASSES + (c1 < c2 ? c2 : c1)];
+    d->pairs++;
+    d->count += n != nr;
+    d->presence += (n > 0) != (nr > 0);
+    if (n > 0 && nr > 0) {
+        const dContactGeom *a = deepest(c, n), *b = deepest(r, nr);
+        double dot = a->normal[0] * b->normal[0] + a->normal[1] * b->normal[1] + a->normal[2] * b->normal[2];
+        d->depth += fabs(a->depth - b->depth) > 1e-4 + 0.01 * fabs(b->depth);
+        d->normal += dot < 0.999;
+    }
+}
+
+static void print_diff(const sim *s)
+{
+    int i, j;
+    if (!s->diff) return;
+    printf("  %s against dCollide on the same poses (pairs that differ; classes as ODE numbers them):\n", s->be->name);
+    printf("    %-7s %10s %8s %9s %8s %8s\n", "classes", "pairs", "count", "presence", "depth", "normal");
+    for (i = 0; i < DIFF_CLASSES; i++)
+        for (j = i; j < DIFF_CLASSES; j++) {
+            const contact_diff *d = &s->diff[i * DIFF_CLASSES + j];
+            if (d->pairs)
+                printf("    %2d-%-4d %10lld %8lld %9lld %8lld %8lld\n", i, j, d->pairs, d->count, d->presence, d->depth, d->normal);
+        }
+}
+
 static void contact_pair(sim *s, dGeomID o1, dGeomID o2, int late)
 {
     dContact c[MAX_CONTACTS];
@@ -575,6 +652,7 @@ static void contact_pair(sim *s, dGeomID o1, dGeomID o2, int late)
     int i, n;
     if (b1 && b2 && dAreConnectedExcluding(b1, b2, dJointTypeContact)) return;
     n = s->be->collide(o1, o2, s->sc->max_contacts, &c[0].geom, (int)sizeof(dContact));
+    if (compare_contacts && s->be->collide != dCollide) compare_pair(s, o1, o2, c, n);
     s->contacts += n;
     for (i = 0; i < n; i++) {
         dJointID j;
@@ -760,6 +838,7 @@ static void sim_free(sim *s)
     free(s->t_space);
     free(s->t_narrow);
     free(s->t_total);
+    free(s->diff);
 }
 
 /* ---- end-of-run metrics -------------------------------------------------- */
@@ -871,14 +950,41 @@ static void json_row(FILE *f, const sim *s, const metrics *m, int same)
 
 /* ---- driver -------------------------------------------------------------- */
 
-static void run_case(const scene *sc, FILE *json)
+static void pose_bodies(const sim *s, const recording *r, int frame);
+
+/* --per-frame FILE: one JSON line per step and backend (its space, colliders
+ * and total ms), to see where a median lies in a running simulation. */
+static void write_steps(FILE *pf, const sim *s)
+{
+    int i;
+    for (i = 0; i < s->sc->steps; i++)
+        fprintf(pf,
+                "{\"suite\":\"ode\",\"case\":\"%s_step\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":1,\"step\":%d,"
+                "\"space_ms\":%.6g,\"narrow_ms\":%.6g,\"total_ms\":%.6g}\n",
+                s->sc->name, s->sc->variant, s->be->name, i, s->t_space[i], s->t_narrow[i], s->t_total[i]);
+}
+
+static void run_case(const scene *case_sc, FILE *json, FILE *pf)
 {
     sim sims[NBACKENDS];
+    scene shortened = *case_sc;
+    const scene *sc = &shortened;
     int b, n = 0, step;
-    for (b = 0; b < NBACKENDS; b++) /* time of impact only where something is fast */
-        if (!BACKENDS[b].toi || sc->wall_x > 0) sim_init(&sims[n++], &BACKENDS[b], sc);
+    if (steps_override > 0) shortened.steps = steps_override;
+    for (b = 0; b < NBACKENDS; b++) { /* time of impact only where something is fast */
+        if ((BACKENDS[b].toi && sc->wall_x <= 0) || (only_backend && strcmp(only_backend, BACKENDS[b].name))) continue;
+        sim_init(&sims[n], &BACKENDS[b], sc);
+        if (start_rec.pose && sc->build == build_stress) pose_bodies(&sims[n], &start_rec, start_frame);
+        n++;
+    }
+    if (n == 0) {
+        fprintf(stderr, "ode_scenes: no backend %s in %s\n", only_backend, sc->name);
+        exit(2);
+    }
     for (step = 0; step < sc->steps; step++)
         for (b = 0; b < n; b++) sim_step(&sims[b]);
+    if (pf)
+        for (b = 0; b < n; b++) write_steps(pf, &sims[b]); /* before sim_metrics sorts the times */
     print_header(sc, sims[0].nbodies);
     for (b = 0; b < n; b++) {
         metrics m = sim_metrics(&sims[b]);
@@ -886,6 +992,7 @@ static void run_case(const scene *sc, FILE *json)
         print_row(&sims[b], &m, same);
         json_row(json, &sims[b], &m, same);
     }
+    for (b = 0; b < n; b++) print_diff(&sims[b]);
     for (b = 0; b < n; b++) sim_free(&sims[b]);
 }
 
@@ -899,7 +1006,8 @@ static void run_case(const scene *sc, FILE *json)
  * and Minko's space collide in one process: per frame, each space's bodies
  * are set to the recorded poses (untimed), then only the space collide is
  * timed, with the same trivial near callback for all three (it stores the two
- * geom pointers). The pair sets are compared outside the timing. Each frame's
+ * geom pointers). A fourth row, `floor`, times what all of them pay through
+ * ODE's API and nothing else (floor_collide). The pair sets are compared outside the timing. Each frame's
  * time is the best of `reps` replays (each replay starts Minko cold), and the
  * spaces take turns going first.
  *
@@ -909,7 +1017,7 @@ static void run_case(const scene *sc, FILE *json)
  *
  * For a stable figure: the measured space collides (but frame 0, Minko's
  * cold start) go through the functions space_only_ode_hash,
- * space_only_ode_sap and space_only_minko, so
+ * space_only_ode_sap, space_only_minko and space_only_floor, so
  *   valgrind --tool=callgrind --toggle-collect='space_only_*' \
  *     build/demos/ode_scenes --scene stress_space --reps 1 --frames A:B --poses FILE
  * gives each space's instructions (inclusive cost of its function) over the
@@ -940,9 +1048,24 @@ static void sink_cb(void *data, dGeomID a, dGeomID b)
 SPACE_ONLY_FN void space_only_ode_hash(dSpaceID space, pair_sink *k);
 SPACE_ONLY_FN void space_only_ode_sap(dSpaceID space, pair_sink *k);
 SPACE_ONLY_FN void space_only_minko(dSpaceID space, pair_sink *k);
+SPACE_ONLY_FN void space_only_floor(dSpaceID space, pair_sink *k);
 SPACE_ONLY_FN void space_only_ode_hash(dSpaceID space, pair_sink *k) { dSpaceCollide(space, k, sink_cb); }
 SPACE_ONLY_FN void space_only_ode_sap(dSpaceID space, pair_sink *k) { dSpaceCollide(space, k, sink_cb); }
 SPACE_ONLY_FN void space_only_minko(dSpaceID space, pair_sink *k) { mk_ode_space_collide(space, k, sink_cb); }
+
+/* The floor under every space collide through ODE's API: the list walk and
+ * each geom's AABB (which ODE recomputes for a geom that moved, as every
+ * space has it do), and no pair. Not a space: its row says how much of the
+ * others' time nothing but ODE's own per-geom work could remove. */
+static void floor_collide(dSpaceID space, void *data, dNearCallback *callback)
+{
+    int n = dSpaceGetNumGeoms(space), i;
+    dReal aabb[6];
+    (void)data;
+    (void)callback;
+    for (i = 0; i < n; i++) dGeomGetAABB(dSpaceGetGeom(space, i), aabb);
+}
+SPACE_ONLY_FN void space_only_floor(dSpaceID space, pair_sink *k) { floor_collide(space, k, sink_cb); }
 
 typedef void space_only_fn(dSpaceID space, pair_sink *k);
 
@@ -953,12 +1076,10 @@ static const struct {
     {{"ode.hash", SPACE_HASH, dSpaceCollide, dCollide, 0}, space_only_ode_hash},
     {{"ode.sap", SPACE_SAP, dSpaceCollide, dCollide, 0}, space_only_ode_sap},
     {{"minko", SPACE_SIMPLE, mk_ode_space_collide, dCollide, 0}, space_only_minko},
+    {{"floor", SPACE_SIMPLE, floor_collide, dCollide, 0}, space_only_floor},
 };
-#define NSPACE_ONLY 3
-#define SPACE_ONLY_MINKO 2
-
-/* Poses of every body, frame by frame: position then quaternion (7 dReal). */
-typedef struct recording { int nbodies, frames; dReal *pose; } recording;
+#define NSPACE_ONLY 4
+#define SPACE_ONLY_MINKO 2 /* the spaces before it are ODE's, compared with it */
 
 static dReal *rec_pose(const recording *r, int frame, int body) { return r->pose + 7 * ((size_t)frame * (size_t)r->nbodies + (size_t)body); }
 
@@ -1075,12 +1196,12 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
     recording rec;
     sim sims[NSPACE_ONLY];
     pair_sink sink = {NULL, 0, 0};
-    pair *got[NSPACE_ONLY] = {NULL, NULL, NULL};
-    size_t gotcap[NSPACE_ONLY] = {0, 0, 0}, ngot[NSPACE_ONLY];
+    pair *got[NSPACE_ONLY] = {NULL};
+    size_t gotcap[NSPACE_ONLY] = {0}, ngot[NSPACE_ONLY];
     long long *fpairs[NSPACE_ONLY];
     double *best[NSPACE_ONLY], med[NSPACE_ONLY], mean[NSPACE_ONLY], worst[NSPACE_ONLY], fastest_ode;
     int worst_at[NSPACE_ONLY];
-    long long npairs[NSPACE_ONLY] = {0, 0, 0}, missing[NSPACE_ONLY] = {0, 0, 0}, extra[NSPACE_ONLY] = {0, 0, 0};
+    long long npairs[NSPACE_ONLY] = {0}, missing[NSPACE_ONLY] = {0}, extra[NSPACE_ONLY] = {0};
     int f, b, rep;
     if (!poses_path || !load_frames(poses_path, sc, &rec)) {
         record_frames(sc, &rec);
@@ -1119,9 +1240,8 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
                 }
             }
             if (rep == 0 && f >= from)
-                for (b = 0; b < NSPACE_ONLY; b++)
-                    if (b != SPACE_ONLY_MINKO)
-                        diff_pairs(got[b], ngot[b], got[SPACE_ONLY_MINKO], ngot[SPACE_ONLY_MINKO], &missing[b], &extra[b]);
+                for (b = 0; b < SPACE_ONLY_MINKO; b++)
+                    diff_pairs(got[b], ngot[b], got[SPACE_ONLY_MINKO], ngot[SPACE_ONLY_MINKO], &missing[b], &extra[b]);
         }
     }
     if (pf) write_per_frame(pf, sc, best, fpairs, from, to); /* before median() sorts best[] */
@@ -1145,7 +1265,7 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
     for (b = 0; b < NSPACE_ONLY; b++) {
         double ratio = med[b] / fastest_ode;
         const char *name = SPACE_ONLY[b].be.name;
-        if (b == SPACE_ONLY_MINKO)
+        if (b >= SPACE_ONLY_MINKO)
             printf("  %-10s %9.3f %9.3f %9.3f %5d %10.1f %14s %14s %10.2f\n", name, med[b], mean[b], worst[b], worst_at[b],
                    (double)npairs[b] / (to - from), "-", "-", ratio);
         else
@@ -1158,7 +1278,7 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
                 "\"pairs_per_frame\":%.6g,\"ratio_to_fastest_ode\":%.6g",
                 sc->variant, name, to - from, rec.nbodies, from, reps, med[b], mean[b], worst[b], worst_at[b],
                 (double)npairs[b] / (to - from), ratio);
-        if (b != SPACE_ONLY_MINKO)
+        if (b < SPACE_ONLY_MINKO)
             fprintf(json, ",\"pairs_not_in_minko\":%lld,\"pairs_only_in_minko\":%lld", missing[b], extra[b]);
         fprintf(json, "}\n");
         fflush(json);
@@ -1408,12 +1528,23 @@ int main(int argc, char **argv)
             per_frame_path = argv[++i];
         else if (!strcmp(argv[i], "--frames") && i + 1 < argc && sscanf(argv[i + 1], "%d:%d", &from, &to) == 2)
             i++;
+        else if (!strcmp(argv[i], "--backend") && i + 1 < argc)
+            only_backend = argv[++i];
+        else if (!strcmp(argv[i], "--steps") && i + 1 < argc && atoi(argv[i + 1]) > 0)
+            steps_override = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--start") && i + 1 < argc && atoi(argv[i + 1]) >= 0)
+            start_frame = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--compare"))
+            compare_contacts = 1;
         else {
             fprintf(stderr,
                     "usage: %s [--quick] [--json FILE] [--scene stress|stress_space|tower|pyramid|hulls|mixed|wall|hull_depth]\n"
                     "       [--reps N] [--poses FILE] [--frames A:B] [--per-frame FILE]   (stress_space: replays per\n"
                     "       frame; recorded frames, read or written; the frames A..B-1 measured; each frame's time and\n"
-                    "       pairs per space as JSON Lines)\n",
+                    "       pairs per space, or each simulated step's times per backend, as JSON Lines)\n"
+                    "       [--backend NAME] [--steps N] [--start F]   (one backend; N steps per scene; the stress\n"
+                    "       scene from frame F of --poses FILE, at rest)\n"
+                    "       [--compare]   (Minko's contacts against dCollide's on the same poses, per class pair)\n",
                     argv[0]);
             return 2;
         }
@@ -1434,13 +1565,22 @@ int main(int argc, char **argv)
         for (i = 0; i < NHULLS; i++) hull_make(&hulls[i], &r);
     }
     ncases = make_cases(cases, quick);
+    if (start_frame > 0) {
+        for (i = 0; i < ncases && cases[i].build != build_stress; i++) {}
+        if (!poses_path || !load_frames(poses_path, &cases[i], &start_rec) || start_frame >= start_rec.frames) {
+            fprintf(stderr, "ode_scenes: --start needs --poses FILE with a recording of the stress scene past frame %d\n",
+                    start_frame);
+            return 2;
+        }
+    }
     for (i = 0; i < ncases; i++) {
-        if (!only || !strcmp(only, cases[i].name)) run_case(&cases[i], json);
+        if (!only || !strcmp(only, cases[i].name)) run_case(&cases[i], json, per_frame);
         if (cases[i].build == build_stress && (!only || !strcmp(only, "stress_space")))
             run_space_only(&cases[i], reps, from, to, poses_path, json, per_frame);
     }
     if (!only || !strcmp(only, "hull_depth")) run_hull_depth(quick, json);
     for (i = 0; i < NHULLS; i++) hull_free(&hulls[i]);
+    free(start_rec.pose);
     mk_ode_close();
     if (json) fclose(json);
     if (per_frame) fclose(per_frame);

@@ -83,6 +83,8 @@ struct mk_bp {
     int sap_losses;           /* SAP: updates whose swaps ran over budget (lost coherence) */
     int losses_at_choice;     /* AUTO: sap_losses when it last chose */
     double moved_share, far_share;  /* AUTO: smoothed motion statistics */
+    int crowd_live;           /* AUTO: live proxies at the last crowding count (0: none yet) */
+    int crowd_at, crowd_cheap;/* ...its update (frames_since_choice) and its answer */
     struct mk_sap *sap;
     struct mk_hgrid *grid;
     struct mk_sweep *sweep;   /* scratch of mk_sweep_pairs_, made on first use */

@@ -34,14 +34,6 @@ mk_feature mk_box_edge(int ci, int cj)
 const unsigned char mk_box_face_corner_[6][4] = {{4, 6, 2, 0}, {1, 3, 7, 5}, {1, 5, 4, 0}, {2, 6, 7, 3}, {2, 3, 1, 0}, {4, 5, 7, 6}};
 const unsigned char mk_box_face_edge_[6][4] = {{6, 10, 4, 8}, {5, 11, 7, 9}, {9, 2, 8, 0}, {10, 3, 11, 1}, {1, 5, 0, 4}, {2, 7, 3, 6}};
 
-void mk_box_edge_ends(mk_vec3 h, int id, mk_vec3 *e0, mk_vec3 *e1)
-{
-    int axis = id / 4, lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2;
-    int bits = ((id & 1) << lo) | (((id >> 1) & 1) << hi);
-    *e0 = mk_box_corner(h, bits);
-    *e1 = mk_box_corner(h, bits | 1 << axis);
-}
-
 void mk_box_face(const mk_shape *s, int axis, int positive, mk_feat *f)
 {
     int face = 2 * axis + positive, i;
@@ -635,17 +627,11 @@ void mk_mf_from_hit(mk_mf *m, const mk_pair *p, mk_manifold_cache *cache, mk_hit
  * not change between frames (Box3D uses the same idea). */
 #define REDUCE_BIAS MK_REAL(0.95)
 
-/* Twice the signed area of triangle (a, b, p) in the contact plane. */
-static mk_real area(mk_real ax, mk_real ay, mk_real bx, mk_real by, mk_real px, mk_real py)
-{
-    return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
-}
-
 int mk_mf_pick4(int n, const mk_real *x, const mk_real *y, const mk_real *depth, int k[4])
 {
     /* dx, dy: each candidate from the deepest; a01: the area it spans with
-     * the deepest and the farthest (the same products as area()). */
-    mk_real extent = 0, best, sign, x0, y0, x1, y1, x2, y2, ex, ey, dx[MK_MF_MAX], dy[MK_MF_MAX], a01[MK_MF_MAX];
+     * the deepest and the farthest (twice the signed area of that triangle). */
+    mk_real extent = 0, best, sign, x0, y0, x1, y1, x2, y2, ex, ey, e1x, e1y, e2x, e2y, dx[MK_MF_MAX], dy[MK_MF_MAX], a01[MK_MF_MAX];
     int i, count = 2;
     k[0] = 0;
     k[1] = k[2] = k[3] = -1;
@@ -668,9 +654,12 @@ int mk_mf_pick4(int n, const mk_real *x, const mk_real *y, const mk_real *depth,
     count = 3;
     x2 = x[k[2]], y2 = y[k[2]];
     sign = a01[k[2]] > 0 ? 1 : -1;
+    /* How far outside the triangle's sides each point lies: the area it
+     * adds to the patch, -sign * area(...) with the sign (+-1, exact)
+     * folded into the sides' vectors. */
+    e1x = -sign * (x2 - x1), e1y = -sign * (y2 - y1), e2x = -sign * (x0 - x2), e2y = -sign * (y0 - y2);
     for (best = 0, i = 0; i < n; ++i) {
-        /* How far outside the triangle's sides the point lies: the area it adds to the patch. */
-        mk_real s = mk_max(-sign * a01[i], mk_max(-sign * area(x1, y1, x2, y2, x[i], y[i]), -sign * area(x2, y2, x0, y0, x[i], y[i])));
+        mk_real s = mk_max(-sign * a01[i], mk_max(e1x * (y[i] - y1) - e1y * (x[i] - x1), e2x * (y[i] - y2) - e2y * (x[i] - x2)));
         if (s * REDUCE_BIAS > best) { best = s; k[3] = i; }
     }
     return k[3] >= 0 ? 4 : count;

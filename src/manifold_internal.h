@@ -139,7 +139,13 @@ static inline mk_vec3 mk_box_corner(mk_vec3 h, int bits)
 {
     return mk_v3(bits & 1 ? h.x : -h.x, bits & 2 ? h.y : -h.y, bits & 4 ? h.z : -h.z);
 }
-void mk_box_edge_ends(mk_vec3 h, int id, mk_vec3 *e0, mk_vec3 *e1);
+static inline void mk_box_edge_ends(mk_vec3 h, int id, mk_vec3 *e0, mk_vec3 *e1)
+{
+    int axis = id / 4, lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2;
+    int bits = ((id & 1) << lo) | (((id >> 1) & 1) << hi);
+    *e0 = mk_box_corner(h, bits);
+    *e1 = mk_box_corner(h, bits | 1 << axis);
+}
 
 /* The ends (the core's own frame) and the feature of the edge named by
  * half-edge e of polytope s: a box enters SAT as its mk_box_hull view,

@@ -1,5 +1,6 @@
 // broadphase.cpp: btBroadphaseInterface on a Minko broadphase (see minko_bullet.h).
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <new>
 
@@ -14,6 +15,9 @@ struct Broadphase::Proxy : public btBroadphaseProxy {
     int index = -1;       // in m_proxies
     bool is_static = false;
     bool dirty = false;   // in m_dirty: Minko's structure may not know its box yet
+    // The box filed in Minko: m_aabbMin/Max (Bullet's box) grown by the
+    // margin when it last left the box filed before, as Dbvt's fat leaves.
+    btVector3 fat_lo, fat_hi;
 };
 
 namespace {
@@ -187,6 +191,14 @@ private:
 
 mk_aabb to_aabb(const btVector3 &lo, const btVector3 &hi) { return mk_aabb_make(to_mk(lo), to_mk(hi)); }
 
+// Whether [lo, hi] is a box (lo <= hi, no NaN) inside [in_lo, in_hi]: a bad
+// box is not, and goes to Minko, which refuses it.
+bool inside(const btVector3 &lo, const btVector3 &hi, const btVector3 &in_lo, const btVector3 &in_hi)
+{
+    return lo.x() >= in_lo.x() && lo.y() >= in_lo.y() && lo.z() >= in_lo.z() && hi.x() <= in_hi.x() &&
+           hi.y() <= in_hi.y() && hi.z() <= in_hi.z() && lo.x() <= hi.x() && lo.y() <= hi.y() && lo.z() <= hi.z();
+}
+
 // Segment from + t (to - from), t in [0, 1], against [lo, hi]: closed slabs.
 bool segment_hits_box(const btVector3 &from, const btVector3 &to, const btVector3 &lo, const btVector3 &hi)
 {
@@ -206,27 +218,37 @@ bool segment_hits_box(const btVector3 &from, const btVector3 &to, const btVector
     return true;
 }
 
+// Minko holds the fat boxes: its answers are tested again on Bullet's boxes.
 struct QueryCtx {
     btBroadphaseAabbCallback *callback;
+    btVector3 lo, hi;
 };
 
 int aabb_visit(void *c, mk_bp_id, void *user)
 {
     Broadphase::Proxy *p = static_cast<Broadphase::Proxy *>(user);
-    if (!p->dirty) static_cast<QueryCtx *>(c)->callback->process(p);
+    QueryCtx *q = static_cast<QueryCtx *>(c);
+    if (!p->dirty && TestAabbAgainstAabb2(q->lo, q->hi, p->m_aabbMin, p->m_aabbMax)) q->callback->process(p);
     return 1;
 }
 
 struct RayCtx {
     btBroadphaseRayCallback *callback;
+    btVector3 from, to, lo, hi;  // the segment and the swept box
     bool stopped;
 };
+
+// Whether the segment meets the proxy's box grown by [-hi, -lo].
+bool ray_hits(const RayCtx &r, const Broadphase::Proxy *p)
+{
+    return segment_hits_box(r.from, r.to, p->m_aabbMin - r.hi, p->m_aabbMax - r.lo);
+}
 
 mk_real ray_visit(void *c, mk_bp_id, void *user, mk_real, mk_real max)
 {
     Broadphase::Proxy *p = static_cast<Broadphase::Proxy *>(user);
     RayCtx *r = static_cast<RayCtx *>(c);
-    if (p->dirty) return max;  // tested on its current box by rayTest itself
+    if (p->dirty || !ray_hits(*r, p)) return max;  // dirty ones: tested by rayTest itself
     if (!r->callback->process(p)) {
         r->stopped = true;
         return -1;
@@ -236,8 +258,12 @@ mk_real ray_visit(void *c, mk_bp_id, void *user, mk_real, mk_real max)
 
 }  // namespace
 
-Broadphase::Broadphase(mk_bp_kind kind, btHashedOverlappingPairCache *cache, int initial_capacity)
-    : m_kind(kind), m_capacity(std::max(initial_capacity, 16)), m_cache(cache), m_own_cache(cache == nullptr)
+Broadphase::Broadphase(mk_bp_kind kind, btHashedOverlappingPairCache *cache, int initial_capacity, btScalar margin)
+    : m_kind(kind),
+      m_capacity(std::max(initial_capacity, 16)),
+      m_margin(std::isfinite(margin) && margin > 0 ? margin : 0),
+      m_cache(cache),
+      m_own_cache(cache == nullptr)
 {
     if (m_own_cache) m_cache = new (btAlignedAlloc(sizeof(PairCache), 16)) PairCache();
     note(rebuild(m_capacity));
@@ -275,7 +301,7 @@ mk_status Broadphase::rebuild(int capacity)
     if (st != MK_OK) return st;
     for (Proxy *p : m_proxies) {
         p->is_static = may_be_minko_static(p->m_collisionFilterGroup, p->m_collisionFilterMask);
-        st = mk_bp_create_proxy(bp, to_aabb(p->m_aabbMin, p->m_aabbMax), p, 0, 0, p->is_static, &p->id);
+        st = mk_bp_create_proxy(bp, to_aabb(p->fat_lo, p->fat_hi), p, 0, 0, p->is_static, &p->id);
         if (st != MK_OK) {
             mk_bp_destroy(bp);
             return st;
@@ -308,7 +334,8 @@ btBroadphaseProxy *Broadphase::createProxy(const btVector3 &aabbMin, const btVec
     }
     Proxy *p = new Proxy(aabbMin, aabbMax, userPtr, collisionFilterGroup, collisionFilterMask);
     p->is_static = may_be_minko_static(collisionFilterGroup, collisionFilterMask);
-    mk_status st = mk_bp_create_proxy(m_bp, to_aabb(aabbMin, aabbMax), p, 0, 0, p->is_static, &p->id);
+    fatten(aabbMin, aabbMax, p->fat_lo, p->fat_hi);
+    mk_status st = mk_bp_create_proxy(m_bp, to_aabb(p->fat_lo, p->fat_hi), p, 0, 0, p->is_static, &p->id);
     if (st != MK_OK) {
         note(st);
         delete p;
@@ -328,6 +355,7 @@ void Broadphase::destroyProxy(btBroadphaseProxy *proxy, btDispatcher *dispatcher
     // Pairs first: the ghost pair callback still reads m_clientObject.
     m_cache->removeOverlappingPairsContainingProxy(p, dispatcher);
     note(mk_bp_destroy_proxy(m_bp, p->id));
+    m_destroyed = true;
     Proxy *last = m_proxies.back();
     m_proxies[p->index] = last;
     last->index = p->index;
@@ -341,18 +369,54 @@ void Broadphase::setAabb(btBroadphaseProxy *proxy, const btVector3 &aabbMin, con
 {
     (void)dispatcher;
     Proxy *p = static_cast<Proxy *>(proxy);
-    if (p->m_aabbMin == aabbMin && p->m_aabbMax == aabbMax) return;
-    mk_status st = mk_bp_move_proxy(m_bp, p->id, to_aabb(aabbMin, aabbMax));
-    if (st != MK_OK) {
-        note(st);
-        return;
+    // Inside the filed box: Minko's structure and pairs stay as they are.
+    if (!inside(aabbMin, aabbMax, p->fat_lo, p->fat_hi)) {
+        btVector3 lo = aabbMin, hi = aabbMax;
+        if (slow(p, aabbMin, aabbMax)) fatten(aabbMin, aabbMax, lo, hi);
+        mk_status st = mk_bp_move_proxy(m_bp, p->id, to_aabb(lo, hi));
+        if (st != MK_OK) {  // the proxy keeps its last good boxes
+            note(st);
+            return;
+        }
+        p->fat_lo = lo;
+        p->fat_hi = hi;
+        if (!p->dirty) {
+            p->dirty = true;
+            m_dirty.push_back(p);
+        }
     }
     p->m_aabbMin = aabbMin;
     p->m_aabbMax = aabbMax;
-    if (!p->dirty) {
-        p->dirty = true;
-        m_dirty.push_back(p);
-    }
+}
+
+// A proxy whose box moved less than the margin since the last call: it may
+// come to rest or jitter inside a fat box. One that moved farther leaves any
+// fat box at its next move too, and the margin would only give it more pairs
+// (callgrind, 3000 boxes, 300 steps, most boxes falling faster than the
+// margin a step: fat boxes for every proxy cost 5.69 G instructions in the
+// collision phase against 5.50 G for tight ones, 125 M of it dispatching the
+// extra pairs).
+bool Broadphase::slow(const Proxy *p, const btVector3 &lo, const btVector3 &hi) const
+{
+    const btVector3 a = (lo - p->m_aabbMin).absolute(), b = (hi - p->m_aabbMax).absolute();
+    return a.x() <= m_margin && a.y() <= m_margin && a.z() <= m_margin && b.x() <= m_margin && b.y() <= m_margin &&
+           b.z() <= m_margin;
+}
+
+// Dbvt's rule (btDbvt::update with a margin): Bullet's box grown by the
+// margin on every side. Infinite sides stay infinite.
+void Broadphase::fatten(const btVector3 &lo, const btVector3 &hi, btVector3 &fat_lo, btVector3 &fat_hi) const
+{
+    const btVector3 m(m_margin, m_margin, m_margin);
+    fat_lo = lo - m;
+    fat_hi = hi + m;
+}
+
+void Broadphase::filed_aabb(const btBroadphaseProxy *proxy, btVector3 &aabbMin, btVector3 &aabbMax) const
+{
+    const Proxy *p = static_cast<const Proxy *>(proxy);
+    aabbMin = p->fat_lo;
+    aabbMax = p->fat_hi;
 }
 
 void Broadphase::getAabb(btBroadphaseProxy *proxy, btVector3 &aabbMin, btVector3 &aabbMax) const
@@ -369,6 +433,9 @@ void Broadphase::calculateOverlappingPairs(btDispatcher *dispatcher)
         mk_status st = rebuild(m_capacity);
         if (st != MK_OK) note(st);
     }
+    // No box filed, no proxy created or destroyed since the last update:
+    // Minko's pairs are as they were (a resting scene's usual step).
+    if (m_dirty.empty() && !m_destroyed && !m_reconcile) return;
     mk_status st = mk_bp_update(m_bp);
     if (st != MK_OK) {
         note(st);  // Minko stays valid; the next good update catches up
@@ -376,6 +443,7 @@ void Broadphase::calculateOverlappingPairs(btDispatcher *dispatcher)
     }
     for (Proxy *p : m_dirty) p->dirty = false;
     m_dirty.clear();
+    m_destroyed = false;
     if (m_reconcile) {
         reconcile(dispatcher);
         return;
@@ -430,19 +498,18 @@ void Broadphase::rayTest(const btVector3 &rayFrom, const btVector3 &rayTo, btBro
     ray.to = to_mk(rayTo);
     ray.box_lo = to_mk(lo);
     ray.box_hi = to_mk(hi);
-    RayCtx ctx = {&rayCallback, false};
+    RayCtx ctx = {&rayCallback, rayFrom, rayTo, lo, hi, false};
     mk_status st = mk_bp_raycast(m_bp, &ray, ray_visit, &ctx);
     if (st != MK_OK) note(st);
     for (size_t i = 0; i < m_dirty.size() && !ctx.stopped; i++) {
         Proxy *p = m_dirty[i];
-        if (segment_hits_box(rayFrom, rayTo, p->m_aabbMin - hi, p->m_aabbMax - lo) && !rayCallback.process(p))
-            ctx.stopped = true;
+        if (ray_hits(ctx, p) && !rayCallback.process(p)) ctx.stopped = true;
     }
 }
 
 void Broadphase::aabbTest(const btVector3 &aabbMin, const btVector3 &aabbMax, btBroadphaseAabbCallback &callback)
 {
-    QueryCtx ctx = {&callback};
+    QueryCtx ctx = {&callback, aabbMin, aabbMax};
     mk_status st = mk_bp_query_aabb(m_bp, to_aabb(aabbMin, aabbMax), aabb_visit, &ctx);
     if (st != MK_OK) note(st);
     for (Proxy *p : m_dirty)

@@ -82,14 +82,26 @@ mk_status minko_pose(const btTransform &world, const ShapeMap &map, mk_pose *out
 // the user's btOverlapFilterCallback) once, when it starts to overlap, and
 // static-filtered proxies (group StaticFilter only, mask without it, as
 // btDiscreteDynamicsWorld gives static and kinematic bodies) cost Minko nothing
-// against each other unless a filter callback is installed. The pair set is
-// exact on the AABBs Bullet hands in (no fattening, unlike Dbvt's stale
-// pairs). rayTest() and aabbTest() use Minko's queries, are reentrant, and see
-// AABBs set since the last step too; rayTest() grows every proxy by the cast
-// shape's box as Dbvt does. Huge AABBs (btStaticPlaneShape) are ordinary
-// proxies. A NaN AABB is refused and the proxy keeps its last good box
-// (last_error() tells). Memory: one Minko broadphase whose proxy capacity
-// doubles, by rebuilding it, when Bullet adds more proxies than it holds.
+// against each other unless a filter callback is installed. Minko holds fat
+// boxes, as Dbvt's leaves are: a proxy is filed as Bullet's AABB grown by
+// `margin` on every side (default gDbvtMargin, Dbvt's 0.05 world units) and
+// filed again only when an AABB set later leaves the filed box: grown by the
+// margin again if its AABB moved less than the margin since the previous
+// setAabb(), else tight (a fast body leaves any fat box at its next move; the
+// margin would only give it pairs). A body that rests or jitters inside its
+// filed box costs O(1) in setAabb(), and a step in which no proxy was filed,
+// created or destroyed costs nothing in calculateOverlappingPairs(). The pair set is
+// exactly the set of overlapping filed boxes (brute force on filed_aabb()),
+// a superset of the touching AABBs' pairs, as Dbvt's is (without Dbvt's
+// lazily removed stale pairs; with margin 0, a box that shrank keeps its
+// larger filed box, as a Dbvt leaf does). getAabb() gives
+// Bullet's AABB. rayTest() and aabbTest() use Minko's queries and answer for
+// Bullet's AABBs, not the filed ones; they are reentrant and see AABBs set
+// since the last step too; rayTest() grows every proxy by the cast shape's
+// box as Dbvt does. Huge AABBs (btStaticPlaneShape) are ordinary proxies. A
+// NaN AABB is refused and the proxy keeps its last good box (last_error()
+// tells). Memory: one Minko broadphase whose proxy capacity doubles, by
+// rebuilding it, when Bullet adds more proxies than it holds.
 class Broadphase : public btBroadphaseInterface {
 public:
     // `cache`: a pair cache to use (not owned, not deferred-removal), or
@@ -97,8 +109,10 @@ public:
     // dispatch (m_deterministicOverlappingPairs) visits the pairs in Bullet's
     // order without Bullet's quicksort per step: the last order is reused
     // while the pairs stay put, else a radix sort rebuilds it.
+    // `margin`: how far a filed box reaches past Bullet's AABB (a NaN,
+    // infinite or negative margin is 0).
     explicit Broadphase(mk_bp_kind kind = MK_BP_AUTO, btHashedOverlappingPairCache *cache = nullptr,
-                        int initial_capacity = 1024);
+                        int initial_capacity = 1024, btScalar margin = gDbvtMargin);
     ~Broadphase() override;
     Broadphase(const Broadphase &) = delete;
     Broadphase &operator=(const Broadphase &) = delete;
@@ -119,6 +133,9 @@ public:
     void resetPool(btDispatcher *dispatcher) override;
     void printStats() override;
 
+    // The box Minko holds for a proxy of this broadphase (see above).
+    void filed_aabb(const btBroadphaseProxy *proxy, btVector3 &aabbMin, btVector3 &aabbMax) const;
+    btScalar margin() const { return m_margin; }
     // The first error Minko reported since the last call (MK_OK if none).
     mk_status take_error();
     const mk_bp *minko() const { return m_bp; }
@@ -133,10 +150,13 @@ private:
         if (m_error == MK_OK) m_error = st;
     }
     bool may_be_minko_static(int group, int mask) const;
+    void fatten(const btVector3 &lo, const btVector3 &hi, btVector3 &fat_lo, btVector3 &fat_hi) const;
+    bool slow(const Proxy *p, const btVector3 &lo, const btVector3 &hi) const;
 
     mk_bp *m_bp = nullptr;
     mk_bp_kind m_kind;
     int m_capacity;
+    btScalar m_margin;
     btHashedOverlappingPairCache *m_cache;
     bool m_own_cache;
     std::vector<Proxy *> m_proxies;  // live proxies, any order
@@ -144,6 +164,7 @@ private:
     int m_uid = 0;
     int m_frame = 0;
     bool m_reconcile = false;        // next update: full mark-and-sweep instead of events
+    bool m_destroyed = false;        // a proxy destroyed since the last update
     const btOverlapFilterCallback *m_filter_seen = nullptr;
     mk_status m_error = MK_OK;
 };
@@ -234,7 +255,6 @@ private:
         mk_status status;
         mk_pose pose;
     };
-    const mk_pose *cached_pose(const btCollisionObjectWrapper *w, const ShapeMap &map, mk_pose *scratch, mk_status *st);
     Backend m_backend;
     CreateFunc *m_create;
     btAlignedObjectArray<PoseEntry> m_poses;  // by btCollisionObject::getWorldArrayIndex()

@@ -3,6 +3,7 @@
 // with float Bullet, both also under ASan + UBSan.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -587,7 +588,19 @@ UidPairs cache_pairs(btBroadphaseInterface *bp)
     return out;
 }
 
-// Every pair of proxies whose stored AABBs overlap (closed) and that the pair
+// The box a broadphase pairs a proxy by: Minko's filed (fat) box, or the
+// stored AABB for Bullet's own broadphases.
+void pairing_box(btBroadphaseInterface *bp, const btBroadphaseProxy *h, btVector3 &lo, btVector3 &hi)
+{
+    if (const mkb::Broadphase *m = dynamic_cast<const mkb::Broadphase *>(bp)) {
+        m->filed_aabb(h, lo, hi);
+    } else {
+        lo = h->m_aabbMin;
+        hi = h->m_aabbMax;
+    }
+}
+
+// Every pair of proxies whose pairing boxes overlap (closed) and that the pair
 // cache's filter accepts: what an exact broadphase must report.
 UidPairs brute_pairs(TestWorld &w)
 {
@@ -597,7 +610,10 @@ UidPairs brute_pairs(TestWorld &w)
     for (int i = 0; i < objs.size(); i++) {
         for (int j = i + 1; j < objs.size(); j++) {
             btBroadphaseProxy *a = objs[i]->getBroadphaseHandle(), *b = objs[j]->getBroadphaseHandle();
-            if (!TestAabbAgainstAabb2(a->m_aabbMin, a->m_aabbMax, b->m_aabbMin, b->m_aabbMax)) continue;
+            btVector3 alo, ahi, blo, bhi;
+            pairing_box(w.bp, a, alo, ahi);
+            pairing_box(w.bp, b, blo, bhi);
+            if (!TestAabbAgainstAabb2(alo, ahi, blo, bhi)) continue;
             if (!cache->needsBroadphaseCollision(a, b)) continue;
             out.push_back(std::make_pair(std::min(a->m_uniqueId, b->m_uniqueId), std::max(a->m_uniqueId, b->m_uniqueId)));
         }
@@ -1011,6 +1027,243 @@ START_TEST(bp_bad_input_and_reset)
     p = bp.createProxy(btVector3(0, 0, 0), btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, &o, 1, -1, nullptr);
     ck_assert_int_eq(p->m_uniqueId, 1);
     bp.destroyProxy(p, nullptr);
+}
+END_TEST
+
+
+// ---- the broadphase's fat boxes (filed AABBs) ----------------------------------
+
+// Every proxy's filed box holds its AABB and is the AABB as it was when last
+// filed, grown by the margin or (a fast mover) not; the pair set is exactly the brute-force set of
+// the filed boxes (check_exact_pairs), so it holds every pair of touching
+// AABBs; with margin 0 too (a shrinking box keeps its filed box).
+START_TEST(bp_fat_boxes_hold_the_aabbs)
+{
+    const mk_bp_kind kinds[2] = {MK_BP_SAP, MK_BP_HGRID};
+    for (mk_bp_kind kind : kinds) {
+        for (btScalar margin : {gDbvtMargin, btScalar(0)}) {
+            mkb::Broadphase *bp = new mkb::Broadphase(kind, nullptr, 1024, margin);
+            ck_assert(bp->margin() == margin);
+            TestWorld w(bp);
+            fill_scene(w, 60, 17);
+            int refiled = 0, kept = 0, tight_count = 0;
+            std::vector<btVector3> last_lo(w.bodies.size());
+            for (int step = 0; step < 90; step++) {
+                drive_kinematic(w, step);
+                w.world->stepSimulation(btScalar(1) / 60, 0);
+                check_exact_pairs(w, step);
+                for (size_t i = 0; i < w.bodies.size(); i++) {
+                    const btBroadphaseProxy *h = w.bodies[i]->getBroadphaseHandle();
+                    btVector3 lo, hi;
+                    bp->filed_aabb(h, lo, hi);
+                    ck_assert(lo.x() <= h->m_aabbMin.x() && lo.y() <= h->m_aabbMin.y() && lo.z() <= h->m_aabbMin.z());
+                    ck_assert(hi.x() >= h->m_aabbMax.x() && hi.y() >= h->m_aabbMax.y() && hi.z() >= h->m_aabbMax.z());
+                    const btVector3 m(margin, margin, margin);
+                    const bool fat = lo == h->m_aabbMin - m && hi == h->m_aabbMax + m;
+                    const bool tight = lo == h->m_aabbMin && hi == h->m_aabbMax;
+                    if (fat || tight) {  // filed this step (tight: a fast mover)
+                        refiled += step > 0 && !(lo == last_lo[i]);
+                        tight_count += tight && !fat;
+                    } else if (step > 0) {  // (step 0: the box filed when the body was added)
+                        ck_assert(lo == last_lo[i]);  // kept from an earlier step
+                        kept++;
+                    }
+                    last_lo[i] = lo;
+                }
+                // Every pair of touching AABBs is there (the filed boxes hold them).
+                UidPairs got = cache_pairs(w.bp);
+                for (size_t i = 0; i < w.bodies.size(); i++)
+                    for (size_t j = i + 1; j < w.bodies.size(); j++) {
+                        btBroadphaseProxy *a = w.bodies[i]->getBroadphaseHandle(), *b = w.bodies[j]->getBroadphaseHandle();
+                        if (TestAabbAgainstAabb2(a->m_aabbMin, a->m_aabbMax, b->m_aabbMin, b->m_aabbMax) &&
+                            w.bp->getOverlappingPairCache()->needsBroadphaseCollision(a, b))
+                            ck_assert(std::binary_search(got.begin(), got.end(), std::make_pair(a->m_uniqueId, b->m_uniqueId)));
+                    }
+            }
+            ck_assert_int_gt(refiled, 0);  // falling bodies leave their boxes
+            if (margin > 0) {
+                ck_assert_int_gt(kept, 0);         // resting ones stay in them
+                ck_assert_int_gt(tight_count, 0);  // fast ones are filed tight
+            }
+            ck_assert_int_eq(bp->take_error(), MK_OK);
+        }
+    }
+}
+END_TEST
+
+// A proxy that moves inside its filed box is not moved in Minko (its box
+// there stays, and so does the pair); one that leaves it is filed again:
+// tight after a move longer than the margin, grown by it after a short one.
+START_TEST(bp_jitter_inside_the_fat_box_costs_nothing)
+{
+    btDefaultCollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    mkb::Broadphase bp(MK_BP_SAP, nullptr, 16, btScalar(0.05));
+    btBroadphaseProxy *a = bp.createProxy(btVector3(0, 0, 0), btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, nullptr, 1, -1, &dispatcher);
+    btBroadphaseProxy *b = bp.createProxy(btVector3(btScalar(1.08), 0, 0), btVector3(2, 1, 1), BOX_SHAPE_PROXYTYPE, nullptr, 1, -1,
+                                          &dispatcher);
+    bp.calculateOverlappingPairs(&dispatcher);
+    ck_assert_int_eq(bp.getOverlappingPairCache()->getNumOverlappingPairs(), 1);  // 0.08 apart, fat boxes meet
+    // Minko's id of a, found by a query over everything.
+    struct Find {
+        const void *want;
+        mk_bp_id id;
+        static int visit(void *c, mk_bp_id id, void *user)
+        {
+            Find *f = static_cast<Find *>(c);
+            if (user == f->want) f->id = id;
+            return 1;
+        }
+    } find = {a, MK_BP_NULL_ID};
+    MK_ASSERT_STATUS(mk_bp_query_aabb(bp.minko(), mk_aabb_make(mk_v3(-10, -10, -10), mk_v3(10, 10, 10)), Find::visit, &find),
+                     MK_OK);
+    const mk_bp_id id0 = find.id;
+    mk_aabb filed0;
+    void *user;
+    MK_ASSERT_STATUS(mk_bp_get_proxy(bp.minko(), id0, &filed0, &user), MK_OK);
+    ck_assert_uint_ne(id0, MK_BP_NULL_ID);
+    mk_rng rng = {5};
+    for (int step = 0; step < 50; step++) {
+        const btScalar dx = (btScalar)mk_rng_range(&rng, -0.04, 0.04), dy = (btScalar)mk_rng_range(&rng, -0.04, 0.04);
+        bp.setAabb(a, btVector3(dx, dy, 0), btVector3(1 + dx, 1 + dy, 1), &dispatcher);
+        bp.calculateOverlappingPairs(&dispatcher);
+        mk_aabb now;
+        MK_ASSERT_STATUS(mk_bp_get_proxy(bp.minko(), id0, &now, &user), MK_OK);
+        ck_assert(now.lo.x == filed0.lo.x && now.lo.y == filed0.lo.y && now.hi.x == filed0.hi.x && now.hi.y == filed0.hi.y);
+        btVector3 lo, hi;
+        bp.getAabb(a, lo, hi);  // Bullet's box, not the filed one
+        ck_assert(lo == btVector3(dx, dy, 0) && hi == btVector3(1 + dx, 1 + dy, 1));
+        ck_assert_int_eq(bp.getOverlappingPairCache()->getNumOverlappingPairs(), 1);
+    }
+    // Leaving the filed box by more than the margin in one move: filed again,
+    // tight (a fast mover); the pair goes. A small move out of that box next:
+    // filed grown by the margin.
+    bp.setAabb(a, btVector3(btScalar(-0.2), 0, 0), btVector3(btScalar(0.8), 1, 1), &dispatcher);
+    bp.calculateOverlappingPairs(&dispatcher);
+    mk_aabb now;
+    MK_ASSERT_STATUS(mk_bp_get_proxy(bp.minko(), id0, &now, &user), MK_OK);
+    ck_assert(now.lo.x == btScalar(-0.2) && now.hi.x == btScalar(0.8) && now.lo.y == 0 && now.hi.z == 1);
+    ck_assert_int_eq(bp.getOverlappingPairCache()->getNumOverlappingPairs(), 0);
+    bp.setAabb(a, btVector3(btScalar(-0.19), 0, 0), btVector3(btScalar(0.81), 1, 1), &dispatcher);
+    bp.calculateOverlappingPairs(&dispatcher);
+    MK_ASSERT_STATUS(mk_bp_get_proxy(bp.minko(), id0, &now, &user), MK_OK);
+    ck_assert(now.lo.x == btScalar(-0.19) - btScalar(0.05) && now.hi.x == btScalar(0.81) + btScalar(0.05));
+    ck_assert(now.lo.y == -btScalar(0.05) && now.hi.z == 1 + btScalar(0.05));
+    bp.destroyProxy(a, &dispatcher);
+    bp.destroyProxy(b, &dispatcher);
+    ck_assert_int_eq(bp.take_error(), MK_OK);
+}
+END_TEST
+
+struct UidCollect : btBroadphaseRayCallback {
+    std::vector<int> uids;
+    bool process(const btBroadphaseProxy *p) override
+    {
+        uids.push_back(p->m_uniqueId);
+        return true;
+    }
+    std::vector<int> sorted()
+    {
+        std::sort(uids.begin(), uids.end());
+        return uids;
+    }
+};
+
+// aabbTest and rayTest answer for Bullet's AABBs, not the filed boxes: random
+// boxes (some moved since the last update, inside or outside their filed
+// boxes) against random queries and rays, and queries made to pass through
+// the margin only, against brute force on the AABBs (Bullet's own btRayAabb
+// for the rays).
+START_TEST(bp_queries_answer_for_the_aabbs)
+{
+    btDefaultCollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    const btScalar margin = btScalar(0.25);  // wide, so that many queries fall in it
+    mkb::Broadphase bp(MK_BP_AUTO, nullptr, 64, margin);
+    mk_rng rng = {4242};
+    std::vector<btBroadphaseProxy *> proxies;
+    auto box_at = [&](btVector3 &lo, btVector3 &hi) {
+        const btVector3 c((btScalar)mk_rng_range(&rng, -6, 6), (btScalar)mk_rng_range(&rng, -6, 6), (btScalar)mk_rng_range(&rng, -6, 6));
+        const btVector3 h((btScalar)mk_rng_range(&rng, 0.1, 1), (btScalar)mk_rng_range(&rng, 0.1, 1), (btScalar)mk_rng_range(&rng, 0.1, 1));
+        lo = c - h;
+        hi = c + h;
+    };
+    for (int i = 0; i < 150; i++) {
+        btVector3 lo, hi;
+        box_at(lo, hi);
+        proxies.push_back(bp.createProxy(lo, hi, BOX_SHAPE_PROXYTYPE, nullptr, 1, -1, &dispatcher));
+    }
+    int reported = 0, margin_only = 0;
+    for (int round = 0; round < 4; round++) {
+        bp.calculateOverlappingPairs(&dispatcher);
+        // Some move inside their filed box (shrink), some leave it (not yet
+        // updated: Minko does not know their box).
+        for (size_t i = 0; i < proxies.size(); i += 3) {
+            btVector3 lo = proxies[i]->m_aabbMin, hi = proxies[i]->m_aabbMax;
+            if (i % 2) {
+                lo += btVector3(margin, margin, margin) * btScalar(0.5);
+                hi += btVector3(margin, margin, margin) * btScalar(0.5);
+            } else {
+                box_at(lo, hi);
+            }
+            bp.setAabb(proxies[i], lo, hi, &dispatcher);
+        }
+        for (int q = 0; q < 100; q++) {
+            btVector3 qlo, qhi;
+            box_at(qlo, qhi);
+            if (q % 4 == 0) {  // touching a proxy's filed box, missing its AABB
+                const btBroadphaseProxy *p = proxies[(size_t)q % proxies.size()];
+                btVector3 flo, fhi;
+                bp.filed_aabb(p, flo, fhi);
+                qlo = btVector3(fhi.x() - margin * btScalar(0.5), p->m_aabbMin.y(), p->m_aabbMin.z());
+                qhi = qlo + btVector3(1, 1, 1);
+                margin_only += TestAabbAgainstAabb2(qlo, qhi, flo, fhi) &&
+                               !TestAabbAgainstAabb2(qlo, qhi, p->m_aabbMin, p->m_aabbMax);
+            }
+            struct Collect : btBroadphaseAabbCallback {
+                std::vector<int> uids;
+                bool process(const btBroadphaseProxy *p) override
+                {
+                    uids.push_back(p->m_uniqueId);
+                    return true;
+                }
+            } got;
+            bp.aabbTest(qlo, qhi, got);
+            std::vector<int> want;
+            for (const btBroadphaseProxy *p : proxies)
+                if (TestAabbAgainstAabb2(qlo, qhi, p->m_aabbMin, p->m_aabbMax)) want.push_back(p->m_uniqueId);
+            std::sort(got.uids.begin(), got.uids.end());
+            std::sort(want.begin(), want.end());
+            ck_assert_msg(got.uids == want, "round %d query %d: %d reported, %d overlap", round, q, (int)got.uids.size(),
+                          (int)want.size());
+            reported += (int)want.size();
+
+            // A ray: random, or through a filed box's margin past the AABB.
+            btVector3 from = qlo * 2, to = qhi * -2;
+            if (q % 4 == 1) {
+                const btBroadphaseProxy *p = proxies[(size_t)q % proxies.size()];
+                const btScalar y = p->m_aabbMax.y() + margin * btScalar(0.5);
+                from = btVector3(-20, y, (p->m_aabbMin.z() + p->m_aabbMax.z()) / 2);
+                to = btVector3(20, y, from.z());
+            }
+            UidCollect hits;
+            bp.rayTest(from, to, hits);
+            std::vector<int> ray_want;
+            for (const btBroadphaseProxy *p : proxies) {
+                btScalar param = 1;
+                btVector3 normal;
+                if (btRayAabb(from, to, p->m_aabbMin, p->m_aabbMax, param, normal)) ray_want.push_back(p->m_uniqueId);
+            }
+            std::sort(ray_want.begin(), ray_want.end());
+            ck_assert_msg(hits.sorted() == ray_want, "round %d ray %d: %d reported, %d hit", round, q, (int)hits.uids.size(),
+                          (int)ray_want.size());
+            reported += (int)ray_want.size();
+        }
+    }
+    ck_assert_int_gt(reported, 200);
+    ck_assert_int_gt(margin_only, 50);
+    for (btBroadphaseProxy *p : proxies) bp.destroyProxy(p, &dispatcher);
+    ck_assert_int_eq(bp.take_error(), MK_OK);
 }
 END_TEST
 
@@ -1749,6 +2002,86 @@ START_TEST(np_switch_at_run_time)
 }
 END_TEST
 
+// ---- the pose cache -------------------------------------------------------------
+
+// The configuration's per-object pose cache serves, for every call, exactly
+// the pose a fresh conversion of the object's current world transform gives:
+// each of the transform's twelve numbers nudged by one ulp in place (the
+// way Bullet's integration writes m_worldTransform, with no revision count),
+// then the shape's axis rotation changed with the transform kept, is seen at
+// the next call; an unchanged object is served its cached entry.
+START_TEST(np_pose_cache_sees_one_ulp)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btDbvtBroadphase bp;
+    btCollisionWorld world(&dispatcher, &bp, &config);
+    btBoxShape cube(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)));
+    btCapsuleShapeX rod(btScalar(0.2), btScalar(1));
+    btCollisionObject a, b;
+    a.setCollisionShape(&cube);
+    b.setCollisionShape(&rod);
+    mk_rng rng = {31};
+    a.setWorldTransform(random_pose(&rng, 3));
+    b.setWorldTransform(random_pose(&rng, 3));
+    world.addCollisionObject(&a);
+    world.addCollisionObject(&b);
+    mkb::ShapeMap ma, mb;
+    MK_ASSERT_STATUS(config.map_shape(&cube, &ma), MK_OK);
+    MK_ASSERT_STATUS(config.map_shape(&rod, &mb), MK_OK);
+    auto served_is_fresh = [&](const mkb::ShapeMap &amap, const mkb::ShapeMap &bmap, const mk_pose **pa_out) {
+        btCollisionObjectWrapper wa(nullptr, &cube, &a, a.getWorldTransform(), -1, -1);
+        btCollisionObjectWrapper wb(nullptr, &rod, &b, b.getWorldTransform(), -1, -1);
+        mk_pose scratch[2], fa, fb;
+        const mk_pose *pa = nullptr, *pb = nullptr;
+        MK_ASSERT_STATUS(config.world_poses(&wa, amap, &wb, bmap, scratch, &pa, &pb), MK_OK);
+        MK_ASSERT_STATUS(mkb::minko_pose(a.getWorldTransform(), amap, &fa), MK_OK);
+        MK_ASSERT_STATUS(mkb::minko_pose(b.getWorldTransform(), bmap, &fb), MK_OK);
+        ck_assert(pa != &scratch[0] && pb != &scratch[1]);  // from the cache
+        ck_assert(std::memcmp(&pa->r, &fa.r, sizeof fa.r) == 0 && std::memcmp(&pa->p, &fa.p, sizeof fa.p) == 0);
+        ck_assert(std::memcmp(&pb->r, &fb.r, sizeof fb.r) == 0 && std::memcmp(&pb->p, &fb.p, sizeof fb.p) == 0);
+        if (pa_out) *pa_out = pa;
+        return *pa;
+    };
+    const mk_pose *entry = nullptr;
+    mk_pose before = served_is_fresh(ma, mb, &entry);
+    const mk_pose *again = nullptr;
+    served_is_fresh(ma, mb, &again);
+    ck_assert(again == entry);  // the same entry, not a scratch pose
+    int changed = 0;
+    for (int k = 0; k < 12; k++) {
+        btTransform &t = a.getWorldTransform();
+        btScalar &x = k < 3 ? t.getOrigin()[k] : t.getBasis()[(k - 3) / 3][(k - 3) % 3];
+        const btScalar was = x;
+        x = std::nextafter(x, was + 1);
+        ck_assert(x != was);
+        const mk_pose now = served_is_fresh(ma, mb, nullptr);
+        changed += std::memcmp(&now.r, &before.r, sizeof now.r) != 0 || std::memcmp(&now.p, &before.p, sizeof now.p) != 0;
+        before = now;
+        b.getWorldTransform().getOrigin()[k % 3] = std::nextafter(b.getWorldTransform().getOrigin()[k % 3], btScalar(-100));
+        served_is_fresh(ma, mb, nullptr);
+    }
+    ck_assert_int_ge(changed, 3);  // at least the origin's ulps reach the pose
+    // The same objects and transforms under another axis rotation (a map
+    // whose axis differs): a new pose, then the first one again.
+    mkb::ShapeMap turned = mb;
+    turned.axis = mk_quat_identity();
+    const mk_pose *pb0 = nullptr;
+    {
+        btCollisionObjectWrapper wa(nullptr, &cube, &a, a.getWorldTransform(), -1, -1);
+        btCollisionObjectWrapper wb(nullptr, &rod, &b, b.getWorldTransform(), -1, -1);
+        mk_pose scratch[2], fresh;
+        const mk_pose *pa = nullptr;
+        MK_ASSERT_STATUS(config.world_poses(&wa, ma, &wb, turned, scratch, &pa, &pb0), MK_OK);
+        MK_ASSERT_STATUS(mkb::minko_pose(b.getWorldTransform(), turned, &fresh), MK_OK);
+        ck_assert(std::memcmp(&pb0->r, &fresh.r, sizeof fresh.r) == 0);
+    }
+    served_is_fresh(ma, mb, nullptr);
+    world.removeCollisionObject(&b);
+    world.removeCollisionObject(&a);
+}
+END_TEST
+
 // ---- continuous collision -----------------------------------------------------
 
 // One world of a given kind with gravity off; bodies owned by the caller.
@@ -1909,6 +2242,12 @@ Suite *suite()
     tcase_add_test(b, bp_switch_at_run_time);
     tcase_add_test(b, bp_bad_input_and_reset);
     suite_add_tcase(s, b);
+    TCase *f = tcase_create("broadphase_fat_boxes");
+    tcase_set_timeout(f, 60);
+    tcase_add_test(f, bp_fat_boxes_hold_the_aabbs);
+    tcase_add_test(f, bp_jitter_inside_the_fat_box_costs_nothing);
+    tcase_add_test(f, bp_queries_answer_for_the_aabbs);
+    suite_add_tcase(s, f);
     TCase *n = tcase_create("narrowphase");
     tcase_set_timeout(n, 60);
     tcase_add_test(n, shape_hull_cache);
@@ -1921,6 +2260,9 @@ Suite *suite()
     tcase_add_test(n, np_hull_candidates_like_bullet);
     tcase_add_test(n, np_switch_at_run_time);
     suite_add_tcase(s, n);
+    TCase *pc = tcase_create("pose_cache");
+    tcase_add_test(pc, np_pose_cache_sees_one_ulp);
+    suite_add_tcase(s, pc);
     TCase *c = tcase_create("ccd");
     tcase_set_timeout(c, 60);
     tcase_add_test(c, ccd_sphere_does_not_tunnel);

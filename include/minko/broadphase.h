@@ -56,7 +56,9 @@
  *                infinite across the rows (a plane) meets every box, O(n);
  *                statics are sorted every time too. Crowding, as AUTO
  *                reads it: the tests a sweep would make, counted in O(n log
- *                n) without making them; few per proxy (boxes lined up in a
+ *                n) without making them (at a choice; the answer is kept
+ *                for 256 updates unless the proxy count changes by a
+ *                quarter); few per proxy (boxes lined up in a
  *                corridor or a wall: about 3) and the sweep beats the grid,
  *                many (boxes filling a volume: 26-49) and it loses by about
  *                2x. Statics sit in SAP's axes like everyone else. Region query O(log n + proxies in
@@ -146,7 +148,7 @@ typedef int (*mk_bp_pair_filter)(void *ctx, mk_bp_id a, void *user_a, mk_bp_id b
 typedef struct mk_bp_def {
     mk_bp_kind kind;              /* default MK_BP_AUTO */
     int proxy_capacity;           /* most live proxies, 1..MK_BP_MAX_PROXIES; default 1024 */
-    int pair_capacity;            /* initial pair capacity; 0 = 2 * proxy_capacity */
+    int pair_capacity;            /* initial pair capacity; 0 = grown from 1024 on demand (fixed: 2 * proxy_capacity) */
     int fixed_capacity;           /* nonzero: never grow; overflow returns MK_ERR_CAPACITY */
     mk_bp_filter_mode filter_mode;/* default MK_BP_FILTER_NONE */
     mk_bp_pair_filter filter;     /* optional */

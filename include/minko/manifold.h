@@ -10,8 +10,9 @@
  * depth >= -margin are reported; those with depth < 0 carry
  * MK_CONTACT_SPECULATIVE. When more than four candidate points exist (clipped
  * faces, cylinder rims) the deepest is kept first, then the points that
- * maximise the contact area; the choice favours earlier candidates by a small
- * margin so it does not flicker between frames. Feature IDs are stable while
+ * maximise the contact area; the choice favours earlier candidates (for two
+ * boxes, in a fixed order of their features) by a small margin so it does
+ * not flicker between frames. Feature IDs are stable while
  * the same features touch, so a host can key its warm-start cache on them
  * (minko/contact_cache.h). An optional caller-owned mk_manifold_cache per
  * pair (zero-initialised = cold) carries the previous frame's choices: for
@@ -56,20 +57,12 @@
  * pairs too; one without GJK or EPA returns MK_ERR_UNSUPPORTED for the pairs
  * that need them. Box and hull pairs whose bounding balls are farther apart
  * than the margin return before anything else. Complexity per call: O(1)
- * for the closed forms and for two boxes (one pass, src/box_box.c: 15
- * axes, a 4-by-4 face clip in the reference face's 2D coordinates, the
- * clipped points reduced there and written straight out; a pair apart
- * along last frame's separating axis tests that one axis from the world
- * poses and stops; on demos/bench_contacts --quick's cases, under
- * callgrind, steady state (--loops 5 less --loops 1), mk_collide_pose:
- * about 2.9k instructions warm for tilted stacked boxes (2.3k cold through
- * mk_collide, where the exact axis is often an edge pair: one point), 2.2k
- * for random overlaps, 0.3k for separated boxes whose bounding boxes
- * overlap; of the stacked ones, per call, about 0.14k the pose, 0.6k SAT,
- * 0.3k the incident face, 0.6k its clip (only the sides some incident
- * corner is outside of are passed), 0.3k the reduction of up to 8 points
- * to 4, 0.4k writing the points, 0.45k the checks, options, depths and
- * edge contacts);
+ * for the closed forms and for two boxes (src/box_box.c: one pass, a pair
+ * apart along last frame's separating axis tests only that axis; about
+ * 2.7k instructions per mk_collide_pose on tilted stacked boxes, 2.1k on
+ * random overlaps, 0.2k on separated boxes whose bounding boxes overlap,
+ * demos/bench_contacts --quick under callgrind; box_box.c says where they
+ * go);
  * for hulls SAT's O(F_A S_B + F_B S_A +
  * E_A E_B) (src/sat.h) plus O(n + m) clipping of faces with n and m (at most
  * 32) vertices; GJK/EPA pairs are bounded by their iteration caps.
