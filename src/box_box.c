@@ -322,22 +322,17 @@ MK_ALWAYS_INLINE int ref_corner(const bb_inc *in, mk_real ru, mk_real rv, mk_rea
 MK_ALWAYS_INLINE int clip_exact(int face, const bb_inc *in, mk_real hu, mk_real hv, mk_real su, mk_real sv, mk_real tol, bb_cand *o)
 {
     const unsigned char *ic = mk_box_face_corner_[in->fi];
-    int oc[5], all = 0, n = 0, i;
-    /* Outcodes: bit s set when the corner is beyond side s by more than its slop. */
+    int oc[5], all = 0, strip = 0, n = 0, i;
+    /* Outcodes: bit s set when the corner is beyond side s by more than
+     * its slop; in arithmetic, as the corners' places are data. */
     for (i = 0; i < 4; ++i) {
         mk_real eu = mk_fabs_(in->u[i]) - hu, ev = mk_fabs_(in->v[i]) - hv;
-        int c = 0;
-        if (eu > 0) {
-            if (!(eu > su)) return -1;
-            c = in->u[i] > 0 ? 1 : 4;
-        }
-        if (ev > 0) {
-            if (!(ev > sv)) return -1;
-            c |= in->v[i] > 0 ? 2 : 8;
-        }
-        oc[i] = c;
-        all |= c;
+        int ou = eu > 0, ov = ev > 0;
+        strip |= (ou & !(eu > su)) | (ov & !(ev > sv));
+        oc[i] = ou * (4 - 3 * (in->u[i] > 0)) | ov * (8 - 6 * (in->v[i] > 0));
+        all |= oc[i];
     }
+    if (strip) return -1;
     if (all) {
         const unsigned char *fe = mk_box_face_edge_[face], *ie = mk_box_face_edge_[in->fi], *sq = side_q[face & 1];
         int both = all & (all >> 1 | all << 3) & 15;
@@ -364,8 +359,12 @@ MK_ALWAYS_INLINE int clip_exact(int face, const bb_inc *in, mk_real hu, mk_real 
             if ((x & 8) && (n = cross_at(in->v, in->u, in->z, i, -hv, hu, su, tol, n, 0, KEY(E(fe[sq[3]]), ke), o)) < 0) return -1;
         }
     }
-    for (i = 0; i < 4; ++i)
-        if (!oc[i]) cand(o, n++, in->u[i], in->v[i], in->z[i], KEY(F(face), V(ic[i])));
+    /* Written whether inside or not, counted only inside (no branch; the
+     * clip has at most 8 points, so slot n is always free). */
+    for (i = 0; i < 4; ++i) {
+        cand(o, n, in->u[i], in->v[i], in->z[i], KEY(F(face), V(ic[i])));
+        n += !oc[i];
+    }
     return n;
 }
 
@@ -376,9 +375,10 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
 {
     const mk_shape *ref = ref_is_a ? p->a : p->b, *inc = ref_is_a ? p->b : p->a;
     mk_real m[3][3], tr[3], hh[3], g[3], hf[2], rr = p->a->radius + p->b->radius, tol;
-    mk_real sgn = face & 1 ? 1 : -1, gs;
+    mk_real sgn = face & 1 ? 1 : -1, gs, sf;
     mk_real x[MK_BB_CLIP_MAX], y[MK_BB_CLIP_MAX], depth[MK_BB_CLIP_MAX];
     static const unsigned char next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
+    static const mk_real sign[2] = {-1, 1};
     int k = face >> 1, iu = next[k], iv = prev[k], ia, ju, jv, i, cnt, n = 0, idx[MK_BB_CLIP_MAX], pick[MK_BB_CLIP_MAX];
     bb_inc in;
     bb_cand cd;
@@ -402,11 +402,12 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
      * lower axis, as mk_support_feature picks it. */
     {
         mk_real d0 = mk_fabs_(m[k][0]), d1 = mk_fabs_(m[k][1]), d2 = mk_fabs_(m[k][2]);
-        ia = (d0 >= d1 && d0 >= d2) ? 0 : (d1 >= d2 ? 1 : 2);
+        ia = !((d0 >= d1) & (d0 >= d2)) * (2 - (d1 >= d2));
     }
     in.fi = 2 * ia + (-sgn * m[k][ia] >= 0);
     ju = next[ia], jv = prev[ia];
-    gs = in.fi & 1 ? g[ia] : -g[ia];
+    sf = sign[in.fi & 1];
+    gs = sf * g[ia];
     /* Corners c0 -+ cu -+ cv in box_face_corner order: (-, -), (+, -),
      * (+, +), (-, +) on a + face, reversed on a - face; only the face's
      * coordinates (u, v) and the height axis (z). */
@@ -414,11 +415,10 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
         int j;
         for (j = 0; j < 3; ++j) {
             int row = j == 0 ? iu : j == 1 ? iv : k;
-            mk_real cu = m[row][ju] * g[ju], cv = m[row][jv] * g[jv], c0 = tr[row] + gs * m[row][ia], s = cu + cv, t = cu - cv;
+            mk_real cu = m[row][ju] * g[ju], cv = m[row][jv] * g[jv], c0 = tr[row] + gs * m[row][ia], s = cu + sf * cv, t = cu - sf * cv;
             mk_real *w = j == 0 ? in.u : j == 1 ? in.v : in.z;
             in.c[j] = c0, in.a1[j] = cu, in.a2[j] = cv;
-            if (in.fi & 1) w[0] = c0 - s, w[1] = c0 + t, w[2] = c0 + s, w[3] = c0 - t;
-            else w[0] = c0 - t, w[1] = c0 + s, w[2] = c0 + t, w[3] = c0 - s;
+            w[0] = c0 - s, w[1] = c0 + t, w[2] = c0 + s, w[3] = c0 - t;
             w[4] = w[0];
         }
     }
@@ -429,8 +429,8 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
     /* Depths from the heights over the face; candidates beyond the margin go. */
     for (i = 0; i < cnt; ++i) {
         mk_real d = rr - (sgn * cd.z[i] - hh[k]);
-        if (!(d >= -margin)) continue;
-        x[n] = cd.u[i], y[n] = cd.v[i], depth[n] = d, idx[n++] = i;
+        x[n] = cd.u[i], y[n] = cd.v[i], depth[n] = d, idx[n] = i;
+        n += d >= -margin;
     }
     if (reduce && n > MK_MANIFOLD_MAX_POINTS) {
         n = mk_mf_pick4(n, x, y, depth, pick);
@@ -524,8 +524,8 @@ MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_
           mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] - mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
     sep /= mk_sqrt_(ok ? l2 : 1);
     better = ok & (sep > best->sep);
-    best->i = better ? i : best->i;
-    best->j = better ? j : best->j;
+    best->i = mk_sel_int(better, i, best->i);
+    best->j = mk_sel_int(better, j, best->j);
     best->sep = mk_max(best->sep, ok ? sep : -MK_REAL_MAX);
 }
 
@@ -586,7 +586,7 @@ static mk_real edge_sep_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat
 MK_ALWAYS_INLINE void box_face_a(mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i, mk_real *best, int *at)
 {
     mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
-    *at = sep > *best ? i : *at;
+    *at = mk_sel_int(sep > *best, i, *at);
     *best = mk_max(*best, sep);
 }
 
@@ -596,7 +596,7 @@ MK_ALWAYS_INLINE void box_face_b(mk_real r[3][3], mk_real ar[3][3], const mk_rea
     mk_real sep;
     db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
     sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
-    *at = sep > *best ? j : *at;
+    *at = mk_sel_int(sep > *best, j, *at);
     *best = mk_max(*best, sep);
 }
 
@@ -667,6 +667,21 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
     sat_boxes(ha, hb, R, t, opt, out);
 }
 
+/* Midpoint of box edge `id` (minko/manifold.h numbering): 0 along its
+ * axis, +-h along the other two by the id's bits, as the mean of its two
+ * ends would be; by factors of +-1, since the edge is data. */
+MK_ALWAYS_INLINE mk_vec3 box_edge_mid(mk_vec3 h, int id)
+{
+    static const mk_real sign[2] = {-1, 1};
+    static const unsigned char lo_of[3] = {1, 0, 0}, hi_of[3] = {2, 2, 1};
+    int axis = id / 4;
+    mk_real c[3];
+    c[lo_of[axis]] = sign[id & 1];
+    c[hi_of[axis]] = sign[(id >> 1) & 1];
+    c[axis] = 0;
+    return mk_v3(c[0] * h.x, c[1] * h.y, c[2] * h.z);
+}
+
 /* The one contact of an edge-pair axis of two boxes: mk_mf_edge_contact's
  * answer from the edges' midpoints and unit axes, A's edge s e_i about ma
  * (|s| <= h_i), B's c + t R_j about mb (|t| <= g_j, c = mb - ma), which
@@ -674,13 +689,10 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
 static mk_real box_edge_contact(const mk_pair *p, int ea, int eb, mk_real sep, mk_real rr, mk_vec3 *qa, mk_feature *fa, mk_feature *fb)
 {
     int ia = mk_box_hull_edge_id(ea), ib = mk_box_hull_edge_id(eb), i = ia / 4, j = ib / 4;
-    mk_vec3 a0, a1, b0, b1, ma, mb, c, rj = *column(&p->r, j), q;
+    mk_vec3 ma, mb, c, rj = *column(&p->r, j), q;
     mk_real ha[3], cc[3], x[3], s, t;
-    mk_box_edge_ends(p->a->u.half_extents, ia, &a0, &a1);
-    mk_box_edge_ends(p->b->u.half_extents, ib, &b0, &b1);
-    /* Midpoints: the ends differ only along the edge's own axis. */
-    ma = mk_v3_scale(mk_v3_add(a0, a1), MK_REAL(0.5));
-    mb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_v3_scale(mk_v3_add(b0, b1), MK_REAL(0.5))), p->t);
+    ma = box_edge_mid(p->a->u.half_extents, ia);
+    mb = mk_v3_add(mk_mat3_mul_v3(p->r, box_edge_mid(p->b->u.half_extents, ib)), p->t);
     c = mk_v3_sub(mb, ma);
     ha[0] = p->a->u.half_extents.x, ha[1] = p->a->u.half_extents.y, ha[2] = p->a->u.half_extents.z;
     cc[0] = c.x, cc[1] = c.y, cc[2] = c.z;

@@ -119,6 +119,10 @@ mk_feature mk_box_edge(int corner_i, int corner_j);
 
 /* Corner `bits` (zyx, set = +extent) of the box of half-extents h, and
  * the two ends of box edge `id` (minko/manifold.h numbering). */
+/* c ? a : b for c = 0 or 1, in arithmetic: which candidate or axis wins
+ * is data the branch predictor cannot learn. */
+MK_ALWAYS_INLINE int mk_sel_int(int c, int a, int b) { return b ^ ((a ^ b) & -c); }
+
 /* The smallest component of v (a box's thinnest half extent). */
 static inline mk_real mk_v3_min_comp(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
 
