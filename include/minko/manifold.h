@@ -10,9 +10,8 @@
  * depth >= -margin are reported; those with depth < 0 carry
  * MK_CONTACT_SPECULATIVE. When more than four candidate points exist (clipped
  * faces, cylinder rims) the deepest is kept first, then the points that
- * maximise the contact area; the choice favours earlier candidates (for two
- * boxes, in a fixed order of their features) by a small margin so it does
- * not flicker between frames. Feature IDs are stable while
+ * maximise the contact area; the choice favours earlier candidates by a small
+ * margin so it does not flicker between frames. Feature IDs are stable while
  * the same features touch, so a host can key its warm-start cache on them
  * (minko/contact_cache.h). An optional caller-owned mk_manifold_cache per
  * pair (zero-initialised = cold) carries the previous frame's choices: for
