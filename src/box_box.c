@@ -394,6 +394,7 @@ static mk_real edge_sep_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat
     a[0] = ha->x, a[1] = ha->y, a[2] = ha->z;
     b[0] = hb->x, b[1] = hb->y, b[2] = hb->z;
     best.sep = -MK_REAL_MAX;
+    best.i = best.j = -1;
     box_edge_axis(r, ar, a, b, d, i, j, &best);
     return best.sep;
 }
