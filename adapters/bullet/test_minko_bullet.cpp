@@ -2082,6 +2082,90 @@ START_TEST(np_pose_cache_sees_one_ulp)
 }
 END_TEST
 
+// Pairs whose broadphase AABBs lie farther apart than the contact breaking
+// threshold (kept as pairs by fat boxes: margin 1 here) are answered from
+// the AABBs alone and end with the manifold Bullet's own algorithms leave:
+// every cached point dropped. Per shape pair, B beside A along x: pass 0
+// AABBs overlapping by 0.05 (points), pass 1 AABBs 1.5 thresholds apart
+// (answered by the AABBs: the points of pass 0 gone, as in the native
+// world), pass 2 0.5 threshold apart (mk_collide runs), pass 3 as pass 0
+// again (a cold pair meets again).
+START_TEST(np_aabb_apart_pairs_drop_points)
+{
+    btBoxShape box(btVector3(btScalar(0.5), btScalar(0.7), btScalar(0.4)));
+    btSphereShape sphere(btScalar(0.5));
+    btCapsuleShape capsule(btScalar(0.3), btScalar(0.8));
+    btConvexHullShape hull;
+    for (int i = 0; i < 8; i++)
+        hull.addPoint(btVector3(i & 1 ? btScalar(0.6) : btScalar(-0.6), i & 2 ? btScalar(0.5) : btScalar(-0.5),
+                                i & 4 ? btScalar(0.4) : btScalar(-0.4)), i == 7);
+    btCollisionShape *shapes[] = {&box, &sphere, &capsule, &hull};
+    int touching = 0, skipped_pairs = 0;
+    for (btCollisionShape *sa : shapes) {
+        for (btCollisionShape *sb : shapes) {
+            mkb::CollisionConfiguration mine;
+            btDefaultCollisionConfiguration native_config;
+            btCollisionDispatcher d_mine(&mine), d_native(&native_config);
+            mkb::Broadphase bp_mine(MK_BP_SAP, nullptr, 64, 1), bp_native(MK_BP_SAP, nullptr, 64, 1);
+            btCollisionWorld w_mine(&d_mine, &bp_mine, &mine), w_native(&d_native, &bp_native, &native_config);
+            btCollisionObject a[2], b[2];
+            btCollisionWorld *worlds[2] = {&w_mine, &w_native};
+            btScalar shift = 0, threshold = 0;
+            bool touched = false;
+            for (int k = 0; k < 2; k++) {
+                a[k].setCollisionShape(sa);
+                b[k].setCollisionShape(sb);
+                a[k].setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 0, 0)));
+                b[k].setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(5, 0, 0)));
+                worlds[k]->addCollisionObject(&a[k]);
+                worlds[k]->addCollisionObject(&b[k]);
+            }
+            for (int pass = 0; pass < 4; pass++) {
+                // B's x for this pass: its AABB's gap to A's (Bullet's boxes, thresholds included).
+                if (pass == 0) {
+                    w_mine.updateAabbs();
+                    const btScalar a_hi = a[0].getBroadphaseHandle()->m_aabbMax.x(), b_lo = b[0].getBroadphaseHandle()->m_aabbMin.x();
+                    shift = b[0].getWorldTransform().getOrigin().x() - (b_lo - a_hi);  // x of B at AABB gap 0
+                }
+                const btScalar gap = pass == 1 ? btScalar(1.5) * threshold : pass == 2 ? btScalar(0.5) * threshold : btScalar(-0.05);
+                for (int k = 0; k < 2; k++) b[k].getWorldTransform().setOrigin(btVector3(shift + gap, 0, 0));
+                const long skips = mine.stats.aabb_skips.load();
+                int points[2];
+                for (int k = 0; k < 2; k++) {
+                    worlds[k]->performDiscreteCollisionDetection();
+                    ck_assert_int_eq(worlds[k]->getPairCache()->getNumOverlappingPairs(), 1);  // the fat boxes still meet
+                    btDispatcher *d = worlds[k]->getDispatcher();
+                    points[k] = 0;
+                    for (int m = 0; m < d->getNumManifolds(); m++) {
+                        points[k] += d->getManifoldByIndexInternal(m)->getNumContacts();
+                        if (k == 0 && pass == 0) threshold = d->getManifoldByIndexInternal(m)->getContactBreakingThreshold();
+                    }
+                }
+                ck_assert_msg(threshold > 0, "shapes %d-%d: no manifold", sa->getShapeType(), sb->getShapeType());
+                const bool skipped = mine.stats.aabb_skips.load() > skips;
+                ck_assert_msg(skipped == (pass == 1), "shapes %d-%d pass %d: skipped %d", sa->getShapeType(), sb->getShapeType(), pass,
+                              (int)skipped);
+                if (pass == 0) touched = points[0] > 0;
+                if (pass == 3) ck_assert_int_eq(points[0] > 0, touched);
+                if (pass == 1) {
+                    ck_assert_int_eq(points[0], 0);
+                    ck_assert_int_eq(points[1], 0);
+                    skipped_pairs++;
+                }
+            }
+            ck_assert_int_eq(mine.stats.collide_errors.load(), 0);
+            touching += touched;
+            for (int k = 0; k < 2; k++) {
+                worlds[k]->removeCollisionObject(&b[k]);
+                worlds[k]->removeCollisionObject(&a[k]);
+            }
+        }
+    }
+    ck_assert_int_ge(touching, 8);  // most pairs touch at pass 0: the drop is tested on real points
+    ck_assert_int_eq(skipped_pairs, 16);
+}
+END_TEST
+
 // ---- continuous collision -----------------------------------------------------
 
 // One world of a given kind with gravity off; bodies owned by the caller.
@@ -2262,6 +2346,7 @@ Suite *suite()
     suite_add_tcase(s, n);
     TCase *pc = tcase_create("pose_cache");
     tcase_add_test(pc, np_pose_cache_sees_one_ulp);
+    tcase_add_test(pc, np_aabb_apart_pairs_drop_points);
     suite_add_tcase(s, pc);
     TCase *c = tcase_create("ccd");
     tcase_set_timeout(c, 60);
