@@ -194,13 +194,6 @@ private:
 // points while this configuration uses it, as with Bullet's polyhedral
 // features). m_customCollisionAlgorithmMaxElementSize is raised to fit the
 // Minko algorithm. Closest-point queries (contactTest) stay Bullet's.
-// A pair whose two objects' broadphase AABBs (as the world's last
-// updateAabbs left them; they hold the shapes) lie farther apart than the
-// manifold's contact breaking threshold on some axis is answered from them
-// alone: no point, its cached points dropped by Bullet's
-// refreshContactPoints, as every point is then beyond the threshold. An
-// object moved by hand must have its AABB updated before the next dispatch,
-// as Bullet's own broadphases require.
 // Backend::native makes this exactly btDefaultCollisionConfiguration;
 // set_narrowphase() switches a running world.
 class CollisionConfiguration : public btDefaultCollisionConfiguration {
@@ -246,7 +239,7 @@ public:
         std::atomic<long> minko_algorithms{0};  // pair algorithms created on Minko
         std::atomic<long> native_fallbacks{0};  // pairs of Minko-registered types left to Bullet
         std::atomic<long> collide_errors{0};    // mk_collide calls that failed (no contacts that step)
-        std::atomic<long> aabb_skips{0};        // pair steps answered by the AABBs alone (see the class comment)
+        std::atomic<long> skipped{0};           // pair steps found farther apart than the threshold without mk_collide
     };
     Stats stats;
 
