@@ -239,6 +239,7 @@ public:
         std::atomic<long> minko_algorithms{0};  // pair algorithms created on Minko
         std::atomic<long> native_fallbacks{0};  // pairs of Minko-registered types left to Bullet
         std::atomic<long> collide_errors{0};    // mk_collide calls that failed (no contacts that step)
+        std::atomic<long> skipped{0};           // pair steps found farther apart than the threshold without mk_collide
     };
     Stats stats;
 
