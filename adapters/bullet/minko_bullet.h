@@ -58,10 +58,29 @@ inline mk_quat to_mk(const btQuaternion &q) { return mk_quat_make(q.x(), q.y(), 
 // refuses (e.g. a box with a zero extent).
 mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out);
 
+namespace detail {
+mk_status refresh_changed(const btCollisionShape *shape, ShapeMap *map, bool *changed);
+}
+
 // Brings a mapping made earlier up to date with its shape (a primitive is
 // mapped again, a hull keeps its Minko hull and takes the current margin);
-// *changed (when given) tells whether the mapping changed.
-mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map, bool *changed = nullptr);
+// *changed (when given) tells whether the mapping changed. Inline for the
+// case of every pair of a box pile, an unchanged box: its half extents and
+// margin against the mapped ones (as Bullet's getHalfExtentsWithMargin()
+// adds them), one virtual call.
+inline mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map, bool *changed = nullptr)
+{
+    if (shape->getShapeType() == BOX_SHAPE_PROXYTYPE && map->shape.type == MK_SHAPE_BOX) {
+        const btScalar margin = shape->getMargin();
+        const btVector3 &core = static_cast<const btBoxShape *>(shape)->getHalfExtentsWithoutMargin();
+        const mk_vec3 &h = map->shape.u.half_extents;
+        if (core.x() + margin == h.x && core.y() + margin == h.y && core.z() + margin == h.z) {
+            if (changed) *changed = false;
+            return MK_OK;
+        }
+    }
+    return detail::refresh_changed(shape, map, changed);
+}
 
 // World pose of the mapped shape for a Bullet world transform.
 mk_transform minko_pose(const btTransform &world, const ShapeMap &map);
