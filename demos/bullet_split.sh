@@ -4,7 +4,8 @@
 # Minko's adapter and Bullet's native pipeline alike. Rows a run does not
 # have are left out; "other" rows are the parent less its named children
 # (dispatch: pair callback, wrappers, algorithm lookup; processCollision:
-# the adapter's own glue, shape checks, result bookkeeping).
+# the adapter's own glue, shape checks -- refresh_map of an unchanged box is
+# inline there --, result bookkeeping).
 #
 #   valgrind --tool=callgrind --toggle-collect='btCollisionWorld::performDiscreteCollisionDetection()' \
 #       --callgrind-out-file=/tmp/x.cg build/demos/bullet_scenes --scene 1000_stack --steps 300 \
@@ -52,7 +53,7 @@ END {
     row("    Minko processCollision", mpc)
     c = pick("manifold.c:mk_collide_pose"); row("      mk_collide_pose", c)
     w = pick("CollisionConfiguration::world_poses"); row("      world_poses", w)
-    r = pick("mkb::refresh_map"); row("      refresh_map", r)
+    r = pick("mkb::detail::refresh_changed"); row("      refresh_map (out of line: changed shapes)", r)
     f = pick("mkb::(anonymous namespace)::farther"); row("      apart (farther)", f)
     wc = pick("mkb::write_contacts(btManifoldResult"); row("      write_contacts", wc)
     rc = pick("mkb::refresh_contacts(btManifoldResult*, bool) ["); row("      refresh_contacts", rc)

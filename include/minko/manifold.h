@@ -58,8 +58,8 @@
  * than the margin return before anything else. Complexity per call: O(1)
  * for the closed forms and for two boxes (src/box_box.c: one pass, a pair
  * apart along last frame's separating axis tests only that axis; per
- * mk_collide_pose about 0.85 of the time of ODE's dBoxBox in the same run
- * on tilted stacked boxes, 0.8 on random overlaps, 0.5 on separated boxes
+ * mk_collide_pose about 0.8 of the time of ODE's dBoxBox in the same run
+ * on tilted stacked boxes and on random overlaps, 0.53 on separated boxes
  * whose bounding boxes overlap, demos/bench_contacts (2.9k, 2.2k and 0.2k
  * instructions under callgrind); box_box.c says where the time goes);
  * for hulls SAT's O(F_A S_B + F_B S_A +
