@@ -38,7 +38,7 @@ mk_status mk_shape_validate(const mk_shape *s)
         if ((st = check_size(s->u.cone.radius)) != MK_OK) return st;
         return check_size(s->u.cone.half_height);
     case MK_SHAPE_HULL:
-        if (!s->u.hull) return MK_ERR_NULL;
+        if (!s->u.hull || !mk_hull_arrays_ok_(s->u.hull)) return MK_ERR_NULL;
         return (s->u.hull->vertex_count >= 4 && s->u.hull->face_count >= 4) ? MK_OK : MK_ERR_DEGENERATE;
     case MK_SHAPE_PLANE:
         if (!mk_v3_is_valid(s->u.plane.normal) || !mk_real_is_valid(s->u.plane.offset)) return MK_ERR_NOT_FINITE;

@@ -42,6 +42,13 @@ mk_vec3 mk_core_support(const mk_shape *s, mk_vec3 dir, int *feature);
 #  define MK_NOINLINE
 #endif
 
+/* The arrays of a hull the queries read: a hand-filled mk_hull without one
+ * is refused instead of dereferenced. */
+MK_ALWAYS_INLINE int mk_hull_arrays_ok_(const mk_hull *h)
+{
+    return h->vertices && h->edges && h->face_edge && h->planes && h->vertex_edge && h->adjacency && h->coords;
+}
+
 /* 1 exactly when mk_shape_validate(s) would return MK_OK, for a shape whose
  * type is t (the caller knows it, e.g. from a dispatch table; pass s->type
  * otherwise): the accepting test each pair query pays, with no call and,
@@ -57,7 +64,9 @@ MK_ALWAYS_INLINE int mk_shape_ok_typed_(const mk_shape *s, mk_shape_type t)
     case MK_SHAPE_CAPSULE: return mk_size_ok_(r) && mk_size_ok_(s->u.capsule.half_height);
     case MK_SHAPE_CYLINDER: return mk_rounding_ok_(r) && mk_size_ok_(s->u.cylinder.radius) && mk_size_ok_(s->u.cylinder.half_height);
     case MK_SHAPE_CONE: return mk_rounding_ok_(r) && mk_size_ok_(s->u.cone.radius) && mk_size_ok_(s->u.cone.half_height);
-    case MK_SHAPE_HULL: return mk_rounding_ok_(r) && s->u.hull && s->u.hull->vertex_count >= 4 && s->u.hull->face_count >= 4;
+    case MK_SHAPE_HULL:
+        return mk_rounding_ok_(r) && s->u.hull && mk_hull_arrays_ok_(s->u.hull) && s->u.hull->vertex_count >= 4 &&
+               s->u.hull->face_count >= 4;
     case MK_SHAPE_PLANE: { /* the rounding radius of a plane is not used */
         mk_vec3 n = s->u.plane.normal;
         return mk_v3_is_valid(n) && mk_fabs_(s->u.plane.offset) <= MK_MAX_COORD && mk_fabs_(mk_v3_len2(n) - 1) <= MK_QUAT_TOLERANCE;

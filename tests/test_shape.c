@@ -1,6 +1,7 @@
 /* test_shape.c: shape constructors, validation, support functions, AABBs. */
 #include <string.h>
 
+#include "minko/distance.h"
 #include "minko/shape.h"
 #include "support/mk_test.h"
 
@@ -110,6 +111,34 @@ START_TEST(aabb_plane_and_bad_transform)
 }
 END_TEST
 
+/* A hand-filled hull missing an array the queries read (here the support
+ * scan's coordinate rows, added in session 9) is refused by validation and
+ * by a query, not dereferenced. */
+START_TEST(hand_filled_hull_without_arrays)
+{
+    static const mk_vec3 cube[8] = {{-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1},
+                                    {-1, -1, 1},  {1, -1, 1},  {-1, 1, 1},  {1, 1, 1}};
+    mk_hull *h = NULL, copy;
+    mk_shape a, b;
+    mk_distance_result r;
+    MK_ASSERT_STATUS(mk_hull_create(cube, 8, NULL, &h), MK_OK);
+    MK_ASSERT_STATUS(mk_shape_hull(h, 0, &a), MK_OK);
+    mk_shape_sphere(0.5, &b);
+    MK_ASSERT_STATUS(mk_distance(&a, mk_transform_identity(), &b, mk_transform_make(mk_v3(3, 0, 0), mk_quat_identity()), NULL, &r), MK_OK);
+    MK_ASSERT_NEAR(r.distance, 1.5, 1e-12);
+    copy = *h;
+    copy.coords = NULL;
+    a.u.hull = &copy;
+    MK_ASSERT_STATUS(mk_shape_validate(&a), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_distance(&a, mk_transform_identity(), &b, mk_transform_make(mk_v3(3, 0, 0), mk_quat_identity()), NULL, &r), MK_ERR_NULL);
+    copy = *h;
+    copy.vertices = NULL;
+    MK_ASSERT_STATUS(mk_shape_validate(&a), MK_ERR_NULL);
+    MK_ASSERT_STATUS(mk_shape_hull(&copy, 0, &b), MK_ERR_NULL);
+    mk_hull_destroy(h);
+}
+END_TEST
+
 static Suite *shape_suite(void)
 {
     Suite *s = suite_create("shape");
@@ -118,6 +147,7 @@ static Suite *shape_suite(void)
     tcase_add_test(tc, support_primitives_analytic);
     tcase_add_test(tc, aabb_is_tight);
     tcase_add_test(tc, aabb_plane_and_bad_transform);
+    tcase_add_test(tc, hand_filled_hull_without_arrays);
     suite_add_tcase(s, tc);
     return s;
 }
