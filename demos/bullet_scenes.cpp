@@ -994,7 +994,7 @@ struct ShadowPair {
 // Worst disagreement seen: the pair, the step and both bodies' poses, to
 // re-run the pair alone.
 struct ShadowWorst {
-    double depth_gap = -1;
+    double score = -1;  // depth gap, or angle between the normals
     int step = -1, lo = -1, hi = -1;
     double depth[2] = {0, 0};
     btVector3 normal[2];
@@ -1012,7 +1012,7 @@ struct Shadow {
     // fall asleep through).
     double rest_ke[2] = {0, 0};
     long rest_bodies = 0, rest_woken[2] = {0, 0};
-    ShadowWorst worst;
+    ShadowWorst worst_depth, worst_normal;  // normal: pairs both see deeper than 1e-3
 };
 
 std::map<std::pair<int, int>, ShadowPair> shadow_pairs(btCollisionWorld *world)
@@ -1125,18 +1125,21 @@ void shadow_compare(const Run &native, const Run &other, int step, bool late, co
             st.nearest += best;
             st.nearest_n++;
         }
-        const double gap = std::fabs(depth[1] - depth[0]);
-        if (gap > sh->worst.depth_gap) {
-            ShadowWorst &w = sh->worst;
-            w.depth_gap = gap;
+        const double angle = std::acos(std::min(1.0, std::max(-1.0, (double)normal[0].dot(normal[1]))));
+        const double scores[2] = {std::fabs(depth[1] - depth[0]), std::min(depth[0], depth[1]) > 1e-3 ? angle : -1};
+        ShadowWorst *worst[2] = {&sh->worst_depth, &sh->worst_normal};
+        for (int k = 0; k < 2; k++) {
+            if (scores[k] <= worst[k]->score) continue;
+            ShadowWorst &w = *worst[k];
+            w.score = scores[k];
             w.step = step;
             w.lo = kv.first.first;
             w.hi = kv.first.second;
-            for (int k = 0; k < 2; k++) {
-                w.depth[k] = depth[k];
-                w.normal[k] = normal[k];
-                w.pts[k] = pair[k]->m->getNumContacts();
-                w.xf[k] = native.bodies()[(size_t)(k ? w.hi : w.lo)]->getWorldTransform();
+            for (int j = 0; j < 2; j++) {
+                w.depth[j] = depth[j];
+                w.normal[j] = normal[j];
+                w.pts[j] = pair[j]->m->getNumContacts();
+                w.xf[j] = native.bodies()[(size_t)(j ? w.hi : w.lo)]->getWorldTransform();
             }
         }
     }
@@ -1201,18 +1204,22 @@ void print_shadow(const SceneSpec &s, const std::string &backend, const Shadow &
                     t.lateral[1] / b, t.fresh[0] / std::max(1.0, t.pts[0]), t.fresh[1] / std::max(1.0, t.pts[1]),
                     t.life[0] / std::max(1.0, t.pts[0]), t.life[1] / std::max(1.0, t.pts[1]));
     }
-    const ShadowWorst &w = sh.worst;
-    if (w.step < 0) return;
-    std::printf("  largest deepest-point gap: step %d, bodies %d and %d: depth native %.6g (%d pts), %s %.6g (%d pts); "
-                "normals (%.6f %.6f %.6f) / (%.6f %.6f %.6f)\n",
-                w.step, w.lo, w.hi, w.depth[0], w.pts[0], backend.c_str(), w.depth[1], w.pts[1], (double)w.normal[0].x(),
-                (double)w.normal[0].y(), (double)w.normal[0].z(), (double)w.normal[1].x(), (double)w.normal[1].y(),
-                (double)w.normal[1].z());
-    for (int k = 0; k < 2; k++) {
-        const btVector3 &o = w.xf[k].getOrigin();
-        const btQuaternion q = w.xf[k].getRotation();
-        std::printf("    body %d: origin (%.17g, %.17g, %.17g) rotation xyzw (%.17g, %.17g, %.17g, %.17g)\n", k ? w.hi : w.lo,
-                    (double)o.x(), (double)o.y(), (double)o.z(), (double)q.x(), (double)q.y(), (double)q.z(), (double)q.w());
+    const ShadowWorst *worst[2] = {&sh.worst_depth, &sh.worst_normal};
+    const char *title[2] = {"largest deepest-point depth gap", "largest angle between the normals (both deeper than 1e-3)"};
+    for (int t = 0; t < 2; t++) {
+        const ShadowWorst &w = *worst[t];
+        if (w.step < 0) continue;
+        std::printf("  %s %.3g: step %d, bodies %d and %d: depth native %.6g (%d pts), %s %.6g (%d pts); "
+                    "normals (%.6f %.6f %.6f) / (%.6f %.6f %.6f)\n",
+                    title[t], w.score, w.step, w.lo, w.hi, w.depth[0], w.pts[0], backend.c_str(), w.depth[1], w.pts[1], (double)w.normal[0].x(),
+                    (double)w.normal[0].y(), (double)w.normal[0].z(), (double)w.normal[1].x(), (double)w.normal[1].y(),
+                    (double)w.normal[1].z());
+        for (int k = 0; k < 2; k++) {
+            const btVector3 &o = w.xf[k].getOrigin();
+            const btQuaternion q = w.xf[k].getRotation();
+            std::printf("    body %d: origin (%.17g, %.17g, %.17g) rotation xyzw (%.17g, %.17g, %.17g, %.17g)\n", k ? w.hi : w.lo,
+                        (double)o.x(), (double)o.y(), (double)o.z(), (double)q.x(), (double)q.y(), (double)q.z(), (double)q.w());
+        }
     }
 }
 
