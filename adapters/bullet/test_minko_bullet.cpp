@@ -2051,6 +2051,66 @@ START_TEST(np_switch_at_run_time)
 }
 END_TEST
 
+// A polyhedral hull on a box meets it as in Bullet's own algorithm, which
+// runs GJK alone on such a pair: one point per frame (Minko's deepest),
+// through addContactPoint, so the manifold matches and keeps points by
+// Bullet's own rule; on a second frame at the same poses that point is
+// matched and keeps its impulse. Its depth is Bullet's own on the same poses.
+START_TEST(np_hull_on_box_one_point_like_bullet)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btConvexHullShape prism;
+    for (int i = 0; i < 8; i++) {
+        const double t = SIMD_PI / 4 * i;
+        for (int up = 0; up < 2; up++)
+            prism.addPoint(btVector3((btScalar)std::cos(t), up ? btScalar(0.25) : btScalar(-0.25), (btScalar)std::sin(t)), false);
+    }
+    prism.recalcLocalAabb();
+    prism.initializePolyhedralFeatures();
+    btBoxShape ground(btVector3(3, btScalar(0.5), 3));
+    btCollisionObject floor, hull;
+    floor.setCollisionShape(&ground);
+    hull.setCollisionShape(&prism);
+    hull.setCollisionFlags(hull.getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+    ContactAddedCallback saved = gContactAddedCallback;
+    gContactAddedCallback = record_written;
+    const btTransform xf(btQuaternion::getIdentity(), btVector3(0, btScalar(-0.5), 0));
+    // The rounded bottom (margin 0.04) 0.01 into the floor, tilted so that
+    // one corner is the deepest.
+    const btTransform xh(btQuaternion(btVector3(1, 0, 0), btScalar(0.01)), btVector3(0, btScalar(0.28), 0));
+    floor.setWorldTransform(xf);
+    hull.setWorldTransform(xh);
+    btCollisionObjectWrapper wf(nullptr, &ground, &floor, xf, -1, -1), wh(nullptr, &prism, &hull, xh, -1, -1);
+    const long before = config.stats.minko_algorithms.load();
+    btCollisionAlgorithm *algo = dispatcher.findAlgorithm(&wf, &wh, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), before + 1);
+    btDefaultCollisionConfiguration native;
+    std::vector<PointOut> bullet = collide_once(&native, &ground, xf, &prism, xh);
+    const PointOut *ref = deepest(bullet);
+    ck_assert(ref != nullptr);
+    for (int frame = 0; frame < 2; frame++) {
+        btManifoldResult result(&wf, &wh);
+        btDispatcherInfo info;
+        g_written.clear();
+        algo->processCollision(&wf, &wh, info, &result);
+        btManifoldArray manifolds;
+        algo->getAllContactManifolds(manifolds);
+        ck_assert_int_eq(manifolds.size(), 1);
+        btPersistentManifold *m = manifolds[0];
+        ck_assert_int_eq((int)g_written.size(), 1);
+        ck_assert_int_eq(m->getNumContacts(), 1);
+        btManifoldPoint &p = m->getContactPoint(0);
+        MK_ASSERT_NEAR(p.getDistance(), ref->distance, 1e-4);
+        if (frame == 0) p.m_appliedImpulse = 5;
+        else MK_ASSERT_NEAR(p.m_appliedImpulse, 5, 0);
+    }
+    gContactAddedCallback = saved;
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
+}
+END_TEST
+
 // ---- the pose cache -------------------------------------------------------------
 
 // The configuration's per-object pose cache serves, for every call, exactly
@@ -2309,6 +2369,7 @@ Suite *suite()
     tcase_add_test(n, np_warm_pairs_take_the_best_face);
     tcase_add_test(n, np_hull_candidates_like_bullet);
     tcase_add_test(n, np_switch_at_run_time);
+    tcase_add_test(n, np_hull_on_box_one_point_like_bullet);
     suite_add_tcase(s, n);
     TCase *pc = tcase_create("pose_cache");
     tcase_add_test(pc, np_pose_cache_sees_one_ulp);
