@@ -363,7 +363,7 @@ MK_ALWAYS_INLINE int highest_hint(const epa_poly *P, const epa_face *F, mk_vec3 
 /* Does the support of s (type t) walk from its hint (hull_support.h)? */
 static int climbs(const mk_shape *s, mk_shape_type t)
 {
-    return t == MK_SHAPE_HULL && s->u.hull->vertex_count > MK_HULL_SCAN_MAX;
+    return t == MK_SHAPE_HULL && s->u.hull->vertex_count > MK_HULL_COLD_SCAN_MAX;
 }
 
 /* The support along face F's normal. A hull that climbs starts from the

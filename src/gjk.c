@@ -1,5 +1,10 @@
 /* gjk.c: GJK distance on the cores, signed-volumes sub-algorithm, warm start. */
 #include "gjk.h"
+/* cos^2 of the largest turn of the search direction after which the
+ * supports still start from the previous vertices (hull_support.h): 60
+ * degrees. Past it a climb is long and a scan (small hulls) or a cold
+ * start is cheaper (a limit of 26 degrees measured the same). */
+#define MK_GJK_WARM_COS2 MK_REAL(0.25)
 
 /* ---- signed volumes (Montanari, Petrinic, Barbieri 2017) --------------------
  * Each solver gets a (sub)simplex of s (vertex indices ascending, the newest
@@ -220,11 +225,14 @@ MK_ALWAYS_INLINE void gjk_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type
     mk_real scale2 = 0, scale, lower = -(mk_real)HUGE_VAL;
     int iter, k, ha = -1, hb = -1, overlap = 0;
     mk_solve_state state = MK_SOLVE_MAX_ITERATIONS;
+    mk_vec3 dprev = mk_v3_zero();
 
     out->normal = mk_v3(1, 0, 0);
     if (cache && warm_simplex(p, cache, s) > 0) {
         ha = cache->ia[0];
         hb = cache->ib[0];
+        /* the hints are as warm as the last query's normal is close */
+        if (mk_v3_is_valid(cache->dir) && mk_v3_len2(cache->dir) > 0) dprev = mk_v3_normalize(cache->dir);
     } else {
         s->n = 1;
         s->v[0] = mk_pair_support_typed(p, ta, tb, initial_direction(p, cache), -1, -1);
@@ -261,8 +269,13 @@ MK_ALWAYS_INLINE void gjk_loop(const mk_pair *p, mk_shape_type ta, mk_shape_type
         /* Supports are scale-free, so the search runs on d as it is and the
          * square root and division of the unit normal below overlap it
          * instead of delaying it. */
-        w = mk_pair_support_typed(p, ta, tb, d, ha, hb);
+        { /* hints only after a small turn of the direction (MK_GJK_WARM_COS2) */
+            mk_real c = mk_v3_dot(d, dprev);
+            int warm = c > 0 && c * c > MK_GJK_WARM_COS2 * dd;
+            w = mk_pair_support_typed(p, ta, tb, d, warm ? ha : -1, warm ? hb : -1);
+        }
         d = mk_v3_scale(d, 1 / mk_sqrt_(dd));
+        dprev = d;
         ha = w.ia;
         hb = w.ib;
         w2 = mk_v3_len2(w.w);

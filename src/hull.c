@@ -959,6 +959,18 @@ static void breadth_first_faces(qh *q, int *order, int nf)
     }
 }
 
+/* The support scan's copy of the vertices (mk_hull.coords). */
+static void fill_coords(const mk_hull *h, mk_real *c)
+{
+    int n = MK_HULL_COORDS_STRIDE(h->vertex_count), i;
+    for (i = 0; i < n; ++i) {
+        mk_vec3 p = h->vertices[i < h->vertex_count ? i : 0];
+        c[i] = p.x;
+        c[n + i] = p.y;
+        c[2 * n + i] = p.z;
+    }
+}
+
 /* The neighbour lists the support walk reads: each vertex's fan, in ring
  * order, as one contiguous run of vertex indices (CSR), so its neighbours'
  * loads are independent instead of a chain of half-edge hops. */
@@ -990,7 +1002,7 @@ static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *
                       int *vout, mk_hull **out)
 {
     int nv = 0, ne = 0, nf = 0, i, f, e;
-    size_t off_planes, off_verts, off_edges, off_fe, off_ve, off_adj, bytes;
+    size_t off_planes, off_verts, off_edges, off_fe, off_ve, off_adj, off_coords, bytes;
     unsigned char *blk;
     mk_hull *h;
     mk_hull_edge *edges;
@@ -1021,7 +1033,8 @@ static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *
     off_adj = off_ve + (size_t)nv * sizeof(uint16_t);
     /* nv + 1 offsets, one neighbour per half-edge, six axis-extreme vertices:
      * 7 nv - 5 entries at most, well inside uint16_t */
-    bytes = off_adj + (size_t)(nv + 1 + ne + 6) * sizeof(uint16_t);
+    off_coords = align_up(off_adj + (size_t)(nv + 1 + ne + 6) * sizeof(uint16_t), 16);
+    bytes = off_coords + 3 * (size_t)MK_HULL_COORDS_STRIDE(nv) * sizeof(mk_real);
     blk = (unsigned char *)al->alloc(al->ctx, bytes, 16);
     if (!blk) return MK_ERR_OUT_OF_MEMORY;
     memset(blk, 0, bytes);
@@ -1043,6 +1056,8 @@ static mk_status emit(qh *q, const mk_vec3 *in, dv3 centre, const mk_allocator *
     h->allocator = *al;
     h->bytes = bytes;
     for (i = 0; i < nv; ++i) ((mk_vec3 *)h->vertices)[i] = in[vout[i]];
+    h->coords = (const mk_real *)(blk + off_coords);
+    fill_coords(h, (mk_real *)(blk + off_coords));
     breadth_first_faces(q, order, h->face_count);
     ne = 0;
     for (nf = 0; nf < h->face_count; ++nf) { /* number the half-edges face by face */

@@ -27,7 +27,12 @@ void mk_box_hull_init(mk_box_hull *b, mk_vec3 h)
 {
     mk_hull *x = &b->hull;
     int i;
-    for (i = 0; i < 8; ++i) b->v[i] = mk_v3(i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z);
+    for (i = 0; i < 8; ++i) {
+        b->v[i] = mk_v3(i & 1 ? h.x : -h.x, i & 2 ? h.y : -h.y, i & 4 ? h.z : -h.z);
+        b->coords[i] = b->v[i].x;
+        b->coords[8 + i] = b->v[i].y;
+        b->coords[16 + i] = b->v[i].z;
+    }
     for (i = 0; i < 6; ++i) {
         mk_real s = (i & 1) ? 1 : -1;
         b->p[i].normal = mk_v3(i / 2 == 0 ? s : 0, i / 2 == 1 ? s : 0, i / 2 == 2 ? s : 0);
@@ -37,6 +42,7 @@ void mk_box_hull_init(mk_box_hull *b, mk_vec3 h)
     x->edge_count = 24;
     x->face_count = 6;
     x->vertices = b->v;
+    x->coords = b->coords;
     x->edges = box_edges;
     x->face_edge = box_face_edge;
     x->planes = b->p;

@@ -19,6 +19,7 @@ typedef struct mk_box_hull {
     mk_hull hull;      /* points at v, p and the static topology */
     mk_vec3 v[8];
     mk_plane p[6];
+    mk_real coords[24]; /* v as hull.coords rows (x, y, z) */
 } mk_box_hull;
 
 /* half_extents must be positive; the view must not be copied (hull points into it). */

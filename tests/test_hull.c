@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "minko/shape.h"
+#include "shape_internal.h"
 #include "support/mk_test.h"
 
 /* Check records a checkpoint on every passing ck_assert (a write per call), far
@@ -644,6 +645,46 @@ START_TEST(support_index_finds_the_maximum)
 }
 END_TEST
 
+/* The scan (hulls of up to MK_HULL_COLD_SCAN_MAX vertices without a hint)
+ * reads the coordinate rows; they must hold the vertices, padded with vertex
+ * 0, and the scan must answer exactly the first of the highest vertices, as a
+ * plain loop over the vertex array does, for every count modulo 4, on
+ * random directions and on the axes (where a box surface has many ties). */
+START_TEST(scan_support_is_exact)
+{
+    mk_rng r = {19};
+    mk_vec3 p[40];
+    int n, i, k;
+    for (n = 4; n <= 36; ++n) {
+        for (k = 0; k < 2; ++k) {
+            mk_hull *h;
+            int stride;
+            if (k == 0) cloud_ellipsoid(&r, p, n, mk_v3(1, 10, 3));
+            else cloud_box_surface(&r, p, n < 8 ? 8 : n, mk_v3(1, 2, 3), 1);
+            h = make_ok(p, k == 0 ? n : (n < 8 ? 8 : n), k == 0 ? NOISY_COPLANAR_OK : 0);
+            stride = (h->vertex_count + 3) / 4 * 4;
+            for (i = 0; i < stride; ++i) {
+                mk_vec3 v = h->vertices[i < h->vertex_count ? i : 0];
+                REQUIRE(h->coords[i] == v.x && h->coords[stride + i] == v.y && h->coords[2 * stride + i] == v.z,
+                        "coordinate rows differ from vertex %d", i);
+            }
+            for (i = 0; i < 106; ++i) {
+                int a = i - 100;
+                mk_vec3 d = i < 100 ? mk_rng_dir(&r)
+                                    : mk_v3(a == 0 ? 1 : a == 1 ? -1 : 0, a == 2 ? 1 : a == 3 ? -1 : 0, a == 4 ? 1 : a == 5 ? -1 : 0);
+                int got = mk_hull_support_index(h, d, -1), want = scan_support(h, d);
+                if (h->vertex_count <= MK_HULL_COLD_SCAN_MAX)
+                    REQUIRE(got == want, "%d vertices: scan answers %d, the first maximum is %d", h->vertex_count, got, want);
+                else
+                    REQUIRE(got >= 0 && got < h->vertex_count && mk_v3_dot(d, h->vertices[got]) >= mk_v3_dot(d, h->vertices[want]),
+                            "%d vertices: %d is not a maximum", h->vertex_count, got);
+            }
+            mk_hull_destroy(h);
+        }
+    }
+}
+END_TEST
+
 START_TEST(hull_shape_support_and_aabb)
 {
     /* A hull goes through mk_shape_hull; its support (with rounding) is the
@@ -700,6 +741,7 @@ static Suite *hull_suite(void)
     tcase_add_test(tc, bad_arguments);
     tcase_add_test(tc, allocator_failures_leak_nothing);
     tcase_add_test(tc, support_index_finds_the_maximum);
+    tcase_add_test(tc, scan_support_is_exact);
     tcase_add_test(tc, hull_shape_support_and_aabb);
     suite_add_tcase(s, tc);
     return s;

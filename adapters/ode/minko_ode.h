@@ -6,7 +6,11 @@
  * size skipped, same non-null body skipped, category/collide bits OR-ed both
  * ways, closed AABB overlap tested on ODE's own dReal AABBs; sub-spaces
  * passed to the callback as geoms; dSpaceCollide2's space/geom/sublevel
- * rules and argument order), each pair once, in a deterministic order. Per
+ * rules and argument order), each pair once, in a deterministic order:
+ * the same calls give the same sequence, and within a pair the geom first
+ * seen in that space comes first (for geoms that were in the space at the
+ * first call, the space's list order then, which in ODE puts the newest
+ * geom first; ODE's own spaces promise no order). Per
  * space, persistent records keyed by dGeomID and a Minko broadphase (its
  * sweep's plan and last order) are brought up to date from the space's
  * geoms on every call, so geoms may be created, moved,

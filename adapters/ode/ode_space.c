@@ -25,6 +25,21 @@
  *    because everything they decide is per pair. Disabled geoms therefore
  *    stay in the broadphase and are filtered out of its pairs, which gives
  *    the same set as skipping them.
+ *
+ * Why not a persistent incremental structure (fat boxes in an mk_bp, moved
+ * only when a geom leaves its box; session 9 built one, measured it and
+ * did not keep it): in ODE's stress heap, the scene the target is set on,
+ * the spheres roll apart for the whole run and move more than their own
+ * size per step (median 0.36-0.51 m per 0.05 s step; 96-100 % of them over
+ * 3 cm, frames 5-98). Nearly every geom left its fat box every call, so
+ * SAP kept answering with its own stateless sweep, with the proxy moves
+ * and a pair table on top: 7.25 M instructions per frame against 4.49 M
+ * for this sweep (callgrind, frames 60-64 of the replay).
+ *
+ * Pair order: the sweep's, fixed by the calls made so far; within a pair,
+ * the geom this space's records met first comes first (a first-seen index
+ * per record), so neither addresses nor removals (which move records)
+ * change which geom a near callback gets as o1.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -43,6 +58,7 @@ typedef struct entry {
     dBodyID body;
     unsigned long cat, col;
     uint32_t seen;    /* sync epoch that last found the geom in the space (marked only when some left) */
+    uint32_t seq;     /* first-seen index: of a pair, the geom with the lower one is passed first */
 } entry;
 
 /* ODE's interleaved AABB {minx, maxx, miny, maxy, minz, maxz}. */
@@ -62,6 +78,7 @@ typedef struct space_state {
     int *order;       /* record of the i-th geom of the previous enumeration */
     size_t norder, caporder;
     uint32_t epoch;
+    uint32_t next_seq; /* first-seen index of the next new record */
     int busy;         /* its pairs are being reported: the records must stay as they are */
 } space_state;
 
@@ -151,14 +168,26 @@ static void check_entry(const space_state *st, entry *e)
  * once per call. */
 #define GEOM_AHEAD 8
 
-static void prefetch_geom(const space_state *st, const entry *e)
+/* The three cache lines of a dxGeom that ODE's list walk, its AABB and
+ * read_filter touch. */
+static void prefetch_lines(const void *geom)
 {
-    const char *g = (const char *)e->geom;
-    if (e->checked == st->epoch) return;
+    const char *g = (const char *)geom;
     MK_PREFETCH(g);
     MK_PREFETCH(g + 64);
     MK_PREFETCH(g + 128);
 }
+
+static void prefetch_geom(const space_state *st, const entry *e)
+{
+    if (e->checked != st->epoch) prefetch_lines(e->geom);
+}
+
+/* ODE's list walk follows each geom's next pointer and dGeomGetAABB reads
+ * the geom: after a world step they are cold, and each miss waits for the
+ * one before. The previous call's order names the geoms to come (ODE keeps
+ * the list's order while they stay dirty): fetched this many ahead. */
+#define WALK_AHEAD 8
 
 /* Closed overlap of ODE's interleaved AABBs (a NaN bound compares false and
  * so never separates, as in ODE). */
@@ -342,6 +371,7 @@ static mk_status add_entry(space_state *st, dGeomID g, long *out)
     if (mk_ode_map_put(&st->index, g, NULL, (uint32_t)i) != 0) return MK_ERR_OUT_OF_MEMORY;
     memset(&st->entries[i], 0, sizeof st->entries[i]);
     st->entries[i].geom = g;
+    st->entries[i].seq = st->next_seq++;
     st->n++;
     *out = i;
     return MK_OK;
@@ -375,7 +405,12 @@ static mk_status sync(space_state *st)
         return MK_ERR_OUT_OF_MEMORY;
     st->epoch++;
     for (i = 0; i < n; i++) {
-        dGeomID g = dSpaceGetGeom(st->space, i); /* sequential access is O(1) in ODE */
+        dGeomID g;
+        if ((size_t)i + WALK_AHEAD < st->norder) {
+            int ahead = st->order[i + WALK_AHEAD];
+            if (ahead < st->n) prefetch_lines(st->entries[ahead].geom); /* a stale hint's address is harmless */
+        }
+        g = dSpaceGetGeom(st->space, i); /* sequential access is O(1) in ODE */
         /* order[] is a hint (records move when one is removed): checked */
         int k = (size_t)i < st->norder ? st->order[i] : -1;
         long slot = k >= 0 && k < st->n && st->entries[k].geom == g ? k : mk_ode_map_get(&st->index, g, NULL);
@@ -483,7 +518,8 @@ void mk_ode_space_collide(dSpaceID space, void *data, dNearCallback *callback)
         if (a->ok && b->ok && ode_filter(a->body, a->cat, a->col, b->body, b->cat, b->col) &&
             (st->exact || aabbs_overlap(st->raw[pairs[i].a], st->raw[pairs[i].b]))) {
             reported++;
-            callback(data, a->geom, b->geom);
+            if (a->seq < b->seq) callback(data, a->geom, b->geom);
+            else callback(data, b->geom, a->geom);
         }
     }
     st->busy = 0;

@@ -170,8 +170,17 @@ static void scene_make(scene *sc, mk_rng *r, dSpaceID space)
     random_filter(r, sc->planes[1]);
 }
 
-/* One frame of churn: bodies and free geoms move, geoms flip enabled, some
- * are destroyed and replaced at once (their addresses tend to be reused). */
+static void shift(dGeomID g, double dx, double dy, double dz)
+{
+    const dReal *p = dGeomGetPosition(g);
+    dGeomSetPosition(g, p[0] + dx, p[1] + dy, p[2] + dz);
+}
+
+/* One frame of churn: bodies and free geoms move, geoms flip enabled or
+ * change their category and collide bits, some are destroyed and replaced
+ * at once (their addresses tend to be reused), some free geoms are
+ * teleported 1000 m away (x > 2 still: see the file's top) or back, and
+ * the rest jitter by a millionth of their size. */
 static void scene_churn(scene *sc, mk_rng *r)
 {
     int i;
@@ -192,10 +201,18 @@ static void scene_churn(scene *sc, mk_rng *r)
                 dGeomDisable(g);
             else
                 dGeomEnable(g);
-        } else if (u < 0.6 && !dGeomGetBody(g)) {
-            const dReal *p = dGeomGetPosition(g);
-            dGeomSetPosition(g, p[0] + mk_rng_range(r, -0.2, 0.2), p[1] + mk_rng_range(r, -0.2, 0.2),
-                             p[2] + mk_rng_range(r, -0.2, 0.2));
+        } else if (u < 0.13) {
+            dGeomSetCategoryBits(g, ~0ul); /* back to the defaults, or new bits half the time */
+            dGeomSetCollideBits(g, ~0ul);
+            random_filter(r, g);
+        } else if (dGeomGetBody(g)) {
+            continue;
+        } else if (u < 0.15) {
+            shift(g, dGeomGetPosition(g)[0] > 100 ? -1000 : 1000, 0, 0);
+        } else if (u < 0.6) {
+            shift(g, mk_rng_range(r, -0.2, 0.2), mk_rng_range(r, -0.2, 0.2), mk_rng_range(r, -0.2, 0.2));
+        } else {
+            shift(g, mk_rng_range(r, -1e-7, 1e-7), mk_rng_range(r, -1e-7, 1e-7), mk_rng_range(r, -1e-7, 1e-7));
         }
     }
 }
@@ -228,7 +245,7 @@ START_TEST(test_pairs_match_simple_and_hash)
     hash = dHashSpaceCreate(0);
     simple = dSimpleSpaceCreate(0);
     scene_make(&sc, &r, hash);
-    for (frame = 0; frame < 30; frame++) {
+    for (frame = 0; frame < 60; frame++) {
         compare_space(sc.space, dSpaceGetClass(sc.space) == dHashSpaceClass ? "hash" : "simple", frame);
         scene_churn(&sc, &r);
         if (frame % 5 == 4) { /* move every geom to the other kind of space */
@@ -404,6 +421,68 @@ START_TEST(test_order_is_deterministic)
     }
     scene_free(&sc[0]);
     scene_free(&sc[1]);
+    mk_ode_close();
+}
+END_TEST
+
+/* Within a pair, the geom the space's records met first comes first: the
+ * test keeps first-seen ranks from the list order at each call (a geom
+ * gone from the list is forgotten, an address not known gets the next
+ * rank), through moves (which reorder ODE's list), removals (which move
+ * the adapter's records), destroyed geoms whose addresses come back, and
+ * teleports. */
+#define MAXRANKS 512
+typedef struct ranks { dGeomID g[MAXRANKS]; unsigned rank[MAXRANKS]; int n; unsigned next; } ranks;
+
+static int rank_find(const ranks *k, dGeomID g)
+{
+    int i;
+    for (i = 0; i < k->n; i++)
+        if (k->g[i] == g) return i;
+    return -1;
+}
+
+static void ranks_sync(ranks *k, dSpaceID space)
+{
+    ranks now;
+    int i, n = dSpaceGetNumGeoms(space);
+    ck_assert_int_le(n, MAXRANKS);
+    now.n = 0;
+    now.next = k->next;
+    for (i = 0; i < n; i++) {
+        dGeomID g = dSpaceGetGeom(space, i);
+        int j = rank_find(k, g);
+        now.g[now.n] = g;
+        now.rank[now.n++] = j >= 0 ? k->rank[j] : now.next++;
+    }
+    *k = now;
+}
+
+START_TEST(test_pair_order_first_seen)
+{
+    mk_rng r = {0x0de0400u};
+    scene sc;
+    ranks k = {{0}, {0}, 0, 0};
+    int frame, i, checked = 0;
+    dInitODE2(0);
+    scene_make(&sc, &r, dSimpleSpaceCreate(0));
+    for (frame = 0; frame < 20; frame++) {
+        pairset got = {0};
+        got.ordered = 1;
+        ranks_sync(&k, sc.space);
+        mk_ode_space_collide(sc.space, &got, ps_cb);
+        for (i = 0; i < got.n; i++) {
+            int a = rank_find(&k, (dGeomID)got.p[i][0]), b = rank_find(&k, (dGeomID)got.p[i][1]);
+            ck_assert(a >= 0 && b >= 0);
+            ck_assert_msg(k.rank[a] < k.rank[b], "frame %d pair %d: seen %u before %u", frame, i, k.rank[b], k.rank[a]);
+            checked++;
+        }
+        compare_space(sc.space, "first seen", frame);
+        ps_free(&got);
+        scene_churn(&sc, &r);
+    }
+    ck_assert_int_gt(checked, 1000);
+    scene_free(&sc);
     mk_ode_close();
 }
 END_TEST
@@ -1188,6 +1267,7 @@ int main(void)
     tcase_add_test(bp, test_space_grows);
     tcase_add_test(bp, test_nested_spaces_expand_alike);
     tcase_add_test(bp, test_order_is_deterministic);
+    tcase_add_test(bp, test_pair_order_first_seen);
     tcase_add_test(bp, test_touching_aabbs);
     tcase_add_test(bp, test_hash_space_bug);
     tcase_add_test(bp, test_nan_aabb);

@@ -63,6 +63,9 @@ typedef struct mk_hull {
     mk_real outer_radius;      /* distance from centroid to the farthest vertex */
     mk_aabb bounds;            /* local AABB */
     mk_real tolerance;         /* distance below which construction treated points as on a plane */
+    const mk_real *coords;     /* the vertices again as three rows (every x, then every y, then every z),
+                                * each padded to a multiple of 4 entries with copies of vertex 0: the
+                                * support scan's layout */
     mk_allocator allocator;    /* the allocator that owns this block */
     size_t bytes;              /* size of the block */
 } mk_hull;
