@@ -123,10 +123,10 @@ const Backend kBackends[] = {
 };
 const int kBackendCount = (int)(sizeof kBackends / sizeof kBackends[0]);
 
-// Which Minko broadphase structure the minko backends use (--bp), and how
-// far its filed boxes reach past Bullet's AABBs (--bp-margin; default
-// Dbvt's gDbvtMargin).
-mk_bp_kind g_bp_kind = MK_BP_AUTO;
+// Which Minko broadphase structure the minko backends use (--bp; default
+// mkb::Broadphase's, SAP), and how far its filed boxes reach past Bullet's
+// AABBs (--bp-margin; default Dbvt's gDbvtMargin).
+mk_bp_kind g_bp_kind = MK_BP_SAP;
 btScalar g_bp_margin = gDbvtMargin;
 // The penetration referee runs (--no-referee leaves it out, for profiling).
 bool g_referee = true;
@@ -1310,7 +1310,7 @@ void usage(const char *argv0)
                  "               body states; prints, per pair type, how its contacts differ from\n"
                  "               native's (points, normals, depths, impulses, lifetimes) instead of the tables\n"
                  "  --shadow-pair LO HI STEP  --shadow, and every point of bodies LO-HI's manifold at STEP\n"
-                 "  --bp KIND    Minko broadphase structure: auto (default), sap, hgrid, brute\n"
+                 "  --bp KIND    Minko broadphase structure: sap (default), auto, hgrid, brute\n"
                  "  --bp-margin M  how far Minko's filed boxes reach past Bullet's AABBs (default 0.05, Dbvt's)\n",
                  argv0);
 }

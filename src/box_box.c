@@ -10,30 +10,39 @@
  * relative pose is built once, the 15 axes are tested in closed form
  * (inlined), and a face axis clips the incident face in the reference
  * face's own 2D coordinates, where the reference face is the rectangle
- * |u| <= h_u, |v| <= h_v. The clip takes no side passes (clip_exact):
- * the incident corners inside, the crossings of incident edges with the
- * sides, the reference corners inside the incident face, each computed
- * once from the four corners. Only where the clip slop decides (a corner
- * in a side's slop strip) or round-off could (a point within it of a side
- * or an edge) do the Sutherland-Hodgman passes of clip.c's general clip,
- * specialised here (clip_strip), answer instead; both give the general
- * clip's points with its feature IDs, listed in one fixed order of the
- * features (rank()), which the reduction's preference for earlier
- * candidates follows. The candidates are reduced to four in the face's
- * coordinates (mk_mf_pick4) and written straight into the mk_manifold,
- * each with two matrix-vector products (tests/test_clip.c compares the
- * clips with the general one on random, stacked and rounded pairs,
- * tests/test_box_box.c whole manifolds, cold and warm).
+ * |u| <= h_u, |v| <= h_v: a side test is one subtraction, only u and v
+ * (and the height along the normal) are interpolated, and a side no
+ * incident corner is outside of is skipped, so an incident face wholly
+ * inside costs no pass at all. The candidates are reduced to four in those
+ * coordinates (mk_mf_pick4) and written straight into the mk_manifold, each
+ * with two matrix-vector products. The clip is the general Sutherland-
+ * Hodgman clip of clip.c specialised, not a new idea: the same side order,
+ * slop rule, crossing names and candidate order, so the manifold and its
+ * feature IDs are those of the general path (tests/test_clip.c compares
+ * the clips on random, stacked and rounded pairs, tests/test_box_box.c
+ * whole manifolds, cold and warm).
  *
- * Where the instructions go (callgrind, mk_collide_pose per call on
- * demos/bench_contacts --quick's tilted stacked boxes, about 2.7k in all):
- * SAT 0.6k (the nine edge axes half of it: four of them tie with the face
- * on stacked boxes, so none can be pruned), the face clip 0.55k plus 0.05k
- * for the strip passes (taken on ~6 % of the clips), the incident face and
- * the depths 0.3k, the reduction 0.25k (5 to 8 candidates on 43 % of the
- * calls), writing the points 0.35k (two matrix products each), the rest
- * (checks, pose, SAT options, edge contacts) 0.6k. A pair that stays apart
- * along last frame's axis costs 0.2k. */
+ * Tuned for time, not instructions: on random poses which axis, corner or
+ * candidate wins is data no branch predictor learns, and a mispredicted
+ * branch costs as much as a dozen square roots. So the SAT tests all 15
+ * axes in full and keeps the best by selects (mk_sel_int), and the
+ * incident face, its corners and the depth filter are chosen in
+ * arithmetic. Session 8's clip without side passes (corners inside, edge
+ * crossings and reference corners each computed once, in a fixed order of
+ * the features) ran fewer instructions but 3 % slower than these passes
+ * in time (its many small branches), and was dropped; branch-free forms
+ * of the clip passes' own tests and of the reduction's running maximum
+ * were slower still (their branches predict well, and selects lengthen
+ * the chains).
+ *
+ * Where the time goes (perf sampling of demos/bench_contacts --backend
+ * minko.pose, share of mk_collide_pose's time; stacked boxes / random
+ * overlaps): the incident face and the clip passes 37 / 30 %, SAT 20 /
+ * 27 % (mostly the nine edge axes' square roots and divisions), the
+ * matrix products (relative pose, points to world and B's frame) 13 / 17
+ * %, the reduction 11 / 5 % (5 to 8 candidates on stacked boxes), the
+ * rest (checks, bounding balls, writing the points, edge contacts) 19 /
+ * 21 %. */
 #include <string.h>
 
 #include "manifold_internal.h"
@@ -51,10 +60,10 @@
 /* A vertex of the incident face while it is clipped: its coordinates in
  * the reference box's frame along the face's two in-plane axes (x[0] along
  * axis (k + 1) % 3, x[1] along (k + 2) % 3, k the face's axis) and along
- * k (z); the features that make it; and, for the edge leaving it, the
+ * k (x[2]); the features that make it; and, for the edge leaving it, the
  * reference side it runs along (-1: none) and its feature. */
 typedef struct bb_vert {
-    mk_real x[2], z;
+    mk_real x[3];
     mk_feature fref, finc, edge;
     signed char ref_edge;
 } bb_vert;
@@ -99,7 +108,7 @@ MK_ALWAYS_INLINE int clip_side(int face, int q, mk_feature finc_face, mk_real si
                 mk_real t = da / (da - db);
                 x->x[0] = a->x[0] + (b->x[0] - a->x[0]) * t;
                 x->x[1] = a->x[1] + (b->x[1] - a->x[1]) * t;
-                x->z = a->z + (b->z - a->z) * t;
+                x->x[2] = a->x[2] + (b->x[2] - a->x[2]) * t;
                 if (a->ref_edge < 0) {
                     x->fref = side;
                     x->finc = a->edge;
@@ -162,226 +171,20 @@ MK_ALWAYS_INLINE mk_real rc(const mk_mat3 *R, int x, int c)
     return x == 0 ? col->x : x == 1 ? col->y : col->z;
 }
 
-/* The clip's candidates in the reference face's coordinates (u, v as
- * bb_vert's x[0], x[1]; z along the face's axis), each with its key:
- * reference feature << 16 | incident feature. They are kept in ascending
- * key order, a fixed order of the features (reference corners, then
- * crossings by reference side and incident edge, then incident corners),
- * so the reduction's preference for earlier candidates does not depend on
- * how the clip got them. */
-typedef struct bb_cand {
-    mk_real u[MK_BB_CLIP_MAX], v[MK_BB_CLIP_MAX], z[MK_BB_CLIP_MAX];
-    uint32_t key[MK_BB_CLIP_MAX];
-} bb_cand;
-
-#define KEY(fref, finc) ((uint32_t)(fref) << 16 | (uint32_t)(finc))
-
-MK_ALWAYS_INLINE void cand(bb_cand *o, int i, mk_real u, mk_real v, mk_real z, uint32_t key)
-{
-    o->u[i] = u, o->v[i] = v, o->z[i] = z, o->key[i] = key;
-}
-
-/* The incident face in the reference face's coordinates: its centre c,
- * half axes a1 and a2 (u, v, z each), its corners in box_face_corner order
- * of its face fi (index 4 repeats 0). */
-typedef struct bb_inc {
-    mk_real c[3], a1[3], a2[3];
-    mk_real u[5], v[5], z[5];
-    int fi;
-} bb_inc;
-
-/* Canonical sides s of the reference rectangle: 0 +u, 1 +v, 2 -u, 3 -v;
- * canonical corner s lies between sides s and s + 1. Per parity of the
- * reference face, side s is its side q = side_q[.][s] (side_axis,
- * side_sign) and corner s its corner q = corner_q[.][s] (box_face_corner
- * order: corner q lies between sides q - 1 and q). */
-static const unsigned char side_q[2][4] = {{1, 0, 3, 2}, {1, 2, 3, 0}};
-static const unsigned char corner_q[2][4] = {{1, 0, 3, 2}, {2, 3, 0, 1}};
-
-/* Position of feature index f in a face's list of four (4: none). */
-static int position(const unsigned char *list, int f)
-{
-    int i = 0;
-    while (i < 4 && list[i] != f) ++i;
-    return i;
-}
-
-/* The order the clip's candidates come in, which the reduction's
- * preference for earlier ones follows: reference corners by canonical
- * corner, crossings by incident edge (box_face_edge order of the incident
- * face fi) then canonical side, incident corners (box_face_corner order);
- * anything else (the strip rule's rare names) last. */
-static int rank(int face, int fi, mk_feature fref, mk_feature finc)
-{
-    static const unsigned char side_s[2][4] = {{1, 0, 3, 2}, {3, 0, 1, 2}}, corner_s[2][4] = {{1, 0, 3, 2}, {2, 3, 0, 1}};
-    int r = MK_FEATURE_GET_INDEX(fref), c = MK_FEATURE_GET_INDEX(finc), q;
-    if (MK_FEATURE_TYPE(fref) == MK_FEATURE_VERTEX && finc == F(fi)) {
-        q = position(mk_box_face_corner_[face], r);
-        return q < 4 ? corner_s[face & 1][q] : 24;
-    }
-    if (MK_FEATURE_TYPE(fref) == MK_FEATURE_EDGE && MK_FEATURE_TYPE(finc) == MK_FEATURE_EDGE) {
-        int i = position(mk_box_face_edge_[fi], c);
-        q = position(mk_box_face_edge_[face], r);
-        return i < 4 && q < 4 ? 4 + 4 * i + side_s[face & 1][q] : 24;
-    }
-    if (fref == F(face) && MK_FEATURE_TYPE(finc) == MK_FEATURE_VERTEX) {
-        q = position(mk_box_face_corner_[fi], c);
-        return q < 4 ? 20 + q : 24;
-    }
-    return 24;
-}
-
-/* The rule of the slop strip: the Sutherland-Hodgman passes above, one per
- * side some corner is outside of; the candidates then sorted by key.
- * Taken only when some point falls in a strip or within round-off of a
- * side (clip_exact says when), so it may be slow. */
-static MK_NOINLINE int clip_strip(int face, const bb_inc *in, const mk_real *hf, mk_real slop, bb_cand *o)
-{
-    bb_vert buf[2][MK_BB_CLIP_MAX + 1];
-    mk_real lo[2], hi[2];
-    mk_feature finc_face = F(in->fi);
-    int cnt = 4, cur = 0, i, q, rk[MK_BB_CLIP_MAX];
-    for (i = 0; i < 4; ++i) {
-        bb_vert *v = &buf[0][i];
-        v->x[0] = in->u[i], v->x[1] = in->v[i], v->z = in->z[i];
-        v->fref = F(face);
-        v->finc = V(mk_box_face_corner_[in->fi][i]);
-        v->ref_edge = -1;
-        v->edge = E(mk_box_face_edge_[in->fi][i]);
-    }
-    buf[0][4] = buf[0][0];
-    lo[0] = mk_min(mk_min(in->u[0], in->u[1]), mk_min(in->u[2], in->u[3]));
-    hi[0] = mk_max(mk_max(in->u[0], in->u[1]), mk_max(in->u[2], in->u[3]));
-    lo[1] = mk_min(mk_min(in->v[0], in->v[1]), mk_min(in->v[2], in->v[3]));
-    hi[1] = mk_max(mk_max(in->v[0], in->v[1]), mk_max(in->v[2], in->v[3]));
-    /* A side no corner is outside of (by more than its slop, m->slop times
-     * the side's length, as clip.c's side_planes sets it) cuts nothing, and
-     * no crossing made by another side is outside it either: skipped. */
-    for (q = 0; q < 4 && cnt > 0; ++q) {
-        int ax = side_axis(q);
-        mk_real sg = side_sign(face, q), side_slop = 2 * slop * hf[1 - ax];
-        if (!((sg > 0 ? hi[ax] : -lo[ax]) - hf[ax] <= side_slop))
-            cnt = clip_side(face, q, finc_face, sg, ax, hf[ax], side_slop, buf[cur], cnt, buf[cur ^ 1]), cur ^= 1;
-    }
-    /* Into clip_exact's order (insertion sort by rank, stable). */
-    for (i = 0; i < cnt; ++i) {
-        const bb_vert *v = &buf[cur][i];
-        int j, r = rank(face, in->fi, v->fref, v->finc);
-        for (j = i; j > 0 && rk[j - 1] > r; --j) {
-            rk[j] = rk[j - 1];
-            cand(o, j, o->u[j - 1], o->v[j - 1], o->z[j - 1], o->key[j - 1]);
-        }
-        rk[j] = r;
-        cand(o, j, v->x[0], v->x[1], v->z, KEY(v->fref, v->finc));
-    }
-    return cnt;
-}
-
-/* The crossing of incident edge i with the side line u = c (cross_u) or
- * v = c (cross_v), appended as candidate n when the other coordinate is
- * within its side's half size h (+ slop s). Returns the new count, or -1
- * when that coordinate lies in the slop strip or within round-off of h
- * (its position along the side is ill-conditioned by the edge's slope). */
-MK_ALWAYS_INLINE int cross_at(const mk_real *x, const mk_real *y, const mk_real *z, int i, mk_real c, mk_real h, mk_real s, mk_real tol, int n,
-                              int along_v, uint32_t key, bb_cand *o)
-{
-    mk_real dx = x[i + 1] - x[i], dy = y[i + 1] - y[i], t = (c - x[i]) / dx, yo = y[i] + dy * t, e = mk_fabs_(yo) - h;
-    mk_real lim = tol * (1 + mk_fabs_(dy / dx));
-    if (e > s + lim) return n;
-    if (e > -lim) return -1;
-    if (along_v) cand(o, n, c, yo, z[i] + (z[i + 1] - z[i]) * t, key);
-    else cand(o, n, yo, c, z[i] + (z[i + 1] - z[i]) * t, key);
-    return n + 1;
-}
-
-/* Reference corner (ru, rv) inside the incident face? Its coordinates in
- * the face's half axes, times det, must both be below |det| (ad); -1
- * within round-off (band) of an edge. Appended as candidate n. */
-MK_ALWAYS_INLINE int ref_corner(const bb_inc *in, mk_real ru, mk_real rv, mk_real det, mk_real ad, mk_real band, int n, uint32_t key, bb_cand *o)
-{
-    mk_real du = ru - in->c[0], dv = rv - in->c[1];
-    mk_real al = du * in->a2[1] - dv * in->a2[0], be = in->a1[0] * dv - in->a1[1] * du;
-    mk_real ea = mk_fabs_(al) - ad, eb = mk_fabs_(be) - ad;
-    if (ea > band || eb > band) return n;
-    if (ea > -band || eb > -band) return -1;
-    cand(o, n, ru, rv, in->c[2] + (al * in->a1[2] + be * in->a2[2]) / det, key);
-    return n + 1;
-}
-
-/* The clip of the incident face against the reference rectangle |u| <=
- * hu, |v| <= hv without side passes, each point computed once from the
- * corners: the reference corners inside the incident face, the crossings
- * of the incident edges with the sides that lie within the other two
- * sides, the incident corners inside (the order of rank()). These are the
- * points of the passes (the polygon they leave is the same), unless a
- * corner lies in a side's slop strip (su, sv: outside by at most that
- * much), where the passes keep it in place of the crossings, or a
- * crossing or a reference corner lies within round-off (tol, absolute)
- * of a side or an incident edge, where the passes' order of rounding
- * decides: then -1, and clip_strip answers. */
-MK_ALWAYS_INLINE int clip_exact(int face, const bb_inc *in, mk_real hu, mk_real hv, mk_real su, mk_real sv, mk_real tol, bb_cand *o)
-{
-    const unsigned char *ic = mk_box_face_corner_[in->fi];
-    int oc[5], all = 0, n = 0, i;
-    /* Outcodes: bit s set when the corner is beyond side s by more than its slop. */
-    for (i = 0; i < 4; ++i) {
-        mk_real eu = mk_fabs_(in->u[i]) - hu, ev = mk_fabs_(in->v[i]) - hv;
-        int c = 0;
-        if (eu > 0) {
-            if (!(eu > su)) return -1;
-            c = in->u[i] > 0 ? 1 : 4;
-        }
-        if (ev > 0) {
-            if (!(ev > sv)) return -1;
-            c |= in->v[i] > 0 ? 2 : 8;
-        }
-        oc[i] = c;
-        all |= c;
-    }
-    if (all) {
-        const unsigned char *fe = mk_box_face_edge_[face], *ie = mk_box_face_edge_[in->fi], *sq = side_q[face & 1];
-        int both = all & (all >> 1 | all << 3) & 15;
-        oc[4] = oc[0];
-        /* Reference corner s can be inside only when some incident corners
-         * are beyond both its sides, s and s + 1. */
-        if (both) {
-            const unsigned char *fc = mk_box_face_corner_[face], *cq = corner_q[face & 1];
-            mk_real det = in->a1[0] * in->a2[1] - in->a1[1] * in->a2[0], ad = mk_fabs_(det);
-            mk_real band = tol * (mk_fabs_(in->a1[0]) + mk_fabs_(in->a1[1]) + mk_fabs_(in->a2[0]) + mk_fabs_(in->a2[1]));
-            uint32_t kf = F(in->fi);
-            if ((both & 1) && (n = ref_corner(in, hu, hv, det, ad, band, n, KEY(V(fc[cq[0]]), kf), o)) < 0) return -1;
-            if ((both & 2) && (n = ref_corner(in, -hu, hv, det, ad, band, n, KEY(V(fc[cq[1]]), kf), o)) < 0) return -1;
-            if ((both & 4) && (n = ref_corner(in, -hu, -hv, det, ad, band, n, KEY(V(fc[cq[2]]), kf), o)) < 0) return -1;
-            if ((both & 8) && (n = ref_corner(in, hu, -hv, det, ad, band, n, KEY(V(fc[cq[3]]), kf), o)) < 0) return -1;
-        }
-        for (i = 0; i < 4; ++i) {
-            int x = oc[i] ^ oc[i + 1];
-            uint32_t ke = E(ie[i]);
-            if (!x) continue;
-            if ((x & 1) && (n = cross_at(in->u, in->v, in->z, i, hu, hv, sv, tol, n, 1, KEY(E(fe[sq[0]]), ke), o)) < 0) return -1;
-            if ((x & 2) && (n = cross_at(in->v, in->u, in->z, i, hv, hu, su, tol, n, 0, KEY(E(fe[sq[1]]), ke), o)) < 0) return -1;
-            if ((x & 4) && (n = cross_at(in->u, in->v, in->z, i, -hu, hv, sv, tol, n, 1, KEY(E(fe[sq[2]]), ke), o)) < 0) return -1;
-            if ((x & 8) && (n = cross_at(in->v, in->u, in->z, i, -hv, hu, su, tol, n, 0, KEY(E(fe[sq[3]]), ke), o)) < 0) return -1;
-        }
-    }
-    for (i = 0; i < 4; ++i)
-        if (!oc[i]) cand(o, n++, in->u[i], in->v[i], in->z[i], KEY(F(face), V(ic[i])));
-    return n;
-}
-
 /* The clip of mk_box_box_clip (see manifold_internal.h), with the
  * reference box, the face and `reduce` constant where it is inlined;
  * returns the count and writes the points as `o` says. */
 MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_real margin, int reduce, const bb_out *o)
 {
     const mk_shape *ref = ref_is_a ? p->a : p->b, *inc = ref_is_a ? p->b : p->a;
-    mk_real m[3][3], tr[3], hh[3], g[3], hf[2], rr = p->a->radius + p->b->radius, tol;
-    mk_real sgn = face & 1 ? 1 : -1, gs;
+    mk_real m[3][3], tr[3], hh[3], g[3], hf[2], lo[2], hi[2], rr = p->a->radius + p->b->radius;
+    mk_real sgn = face & 1 ? 1 : -1, gs, sf;
     mk_real x[MK_BB_CLIP_MAX], y[MK_BB_CLIP_MAX], depth[MK_BB_CLIP_MAX];
+    bb_vert buf[2][MK_BB_CLIP_MAX + 1];
     static const unsigned char next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
-    int k = face >> 1, iu = next[k], iv = prev[k], ia, ju, jv, i, cnt, n = 0, idx[MK_BB_CLIP_MAX], pick[MK_BB_CLIP_MAX];
-    bb_inc in;
-    bb_cand cd;
+    static const mk_real sign[2] = {-1, 1};
+    int k = face >> 1, iu = next[k], iv = prev[k], ia, ju, jv, fi, i, q, cnt = 4, cur = 0, n = 0, idx[MK_BB_CLIP_MAX], pick[MK_BB_CLIP_MAX];
+    mk_feature finc_face;
     /* The incident box in the reference frame: x_ref = m x_inc + tr (R and
      * t for B in A's frame, R^T and -R^T t for A in B's). */
     for (i = 0; i < 3; ++i) {
@@ -399,38 +202,57 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
     hf[0] = hh[iu], hf[1] = hh[iv];
     /* The incident face: the incident box's face most against the normal
      * (-sgn e_k in the reference frame faces the incident box), ties to the
-     * lower axis, as mk_support_feature picks it. */
+     * lower axis, as mk_support_feature picks it. Which face that is, is
+     * data: chosen in arithmetic, and its sign taken as a factor. */
     {
         mk_real d0 = mk_fabs_(m[k][0]), d1 = mk_fabs_(m[k][1]), d2 = mk_fabs_(m[k][2]);
-        ia = (d0 >= d1 && d0 >= d2) ? 0 : (d1 >= d2 ? 1 : 2);
+        ia = !((d0 >= d1) & (d0 >= d2)) * (2 - (d1 >= d2));
     }
-    in.fi = 2 * ia + (-sgn * m[k][ia] >= 0);
+    fi = 2 * ia + (-sgn * m[k][ia] >= 0);
+    finc_face = F(fi);
     ju = next[ia], jv = prev[ia];
-    gs = in.fi & 1 ? g[ia] : -g[ia];
-    /* Corners c0 -+ cu -+ cv in box_face_corner order: (-, -), (+, -),
-     * (+, +), (-, +) on a + face, reversed on a - face; only the face's
-     * coordinates (u, v) and the height axis (z). */
+    sf = sign[fi & 1];
+    gs = sf * g[ia];
+    /* Corners c0 - s, c0 + t, c0 + s, c0 - t in box_face_corner order, s
+     * and t = cu -+ cv on a + face, swapped on a - face (the order runs the
+     * other way); only the face's coordinates (u, v) and the height axis
+     * (z). */
     {
         int j;
         for (j = 0; j < 3; ++j) {
             int row = j == 0 ? iu : j == 1 ? iv : k;
-            mk_real cu = m[row][ju] * g[ju], cv = m[row][jv] * g[jv], c0 = tr[row] + gs * m[row][ia], s = cu + cv, t = cu - cv;
-            mk_real *w = j == 0 ? in.u : j == 1 ? in.v : in.z;
-            in.c[j] = c0, in.a1[j] = cu, in.a2[j] = cv;
-            if (in.fi & 1) w[0] = c0 - s, w[1] = c0 + t, w[2] = c0 + s, w[3] = c0 - t;
-            else w[0] = c0 - t, w[1] = c0 + s, w[2] = c0 + t, w[3] = c0 - s;
-            w[4] = w[0];
+            mk_real cu = m[row][ju] * g[ju], cv = sf * (m[row][jv] * g[jv]), c0 = tr[row] + gs * m[row][ia], s = cu + cv, t = cu - cv;
+            buf[0][0].x[j] = c0 - s, buf[0][1].x[j] = c0 + t, buf[0][2].x[j] = c0 + s, buf[0][3].x[j] = c0 - t;
+        }
+        for (i = 0; i < 4; ++i) {
+            bb_vert *v = &buf[0][i];
+            v->fref = F(face);
+            v->finc = V(mk_box_face_corner_[fi][i]);
+            v->ref_edge = -1;
+            v->edge = E(mk_box_face_edge_[fi][i]);
+        }
+        buf[0][4] = buf[0][0];
+        for (j = 0; j < 2; ++j) {
+            lo[j] = mk_min(mk_min(buf[0][0].x[j], buf[0][1].x[j]), mk_min(buf[0][2].x[j], buf[0][3].x[j]));
+            hi[j] = mk_max(mk_max(buf[0][0].x[j], buf[0][1].x[j]), mk_max(buf[0][2].x[j], buf[0][3].x[j]));
         }
     }
-    /* Round-off of the corners' coordinates, far below any slop that matters. */
-    tol = 64 * MK_REAL_EPSILON * (mk_fabs_(tr[0]) + mk_fabs_(tr[1]) + mk_fabs_(tr[2]) + g[0] + g[1] + g[2] + hf[0] + hf[1]);
-    cnt = clip_exact(face, &in, hf[0], hf[1], 2 * slop * hf[1], 2 * slop * hf[0], tol, &cd);
-    if (cnt < 0) cnt = clip_strip(face, &in, hf, slop, &cd);
-    /* Depths from the heights over the face; candidates beyond the margin go. */
+    /* A side no corner is outside of (by more than its slop, m->slop times
+     * the side's length, as clip.c's side_planes sets it) cuts nothing, and
+     * no crossing made by another side is outside it either: skipped. */
+    for (q = 0; q < 4 && cnt > 0; ++q) {
+        int ax = side_axis(q);
+        mk_real sg = side_sign(face, q), side_slop = 2 * slop * hf[1 - ax];
+        if (!((sg > 0 ? hi[ax] : -lo[ax]) - hf[ax] <= side_slop))
+            cnt = clip_side(face, q, finc_face, sg, ax, hf[ax], side_slop, buf[cur], cnt, buf[cur ^ 1]), cur ^= 1;
+    }
+    /* Depths from the heights over the face; candidates beyond the margin
+     * go (each written, counted only if kept: no branch on the data). */
     for (i = 0; i < cnt; ++i) {
-        mk_real d = rr - (sgn * cd.z[i] - hh[k]);
-        if (!(d >= -margin)) continue;
-        x[n] = cd.u[i], y[n] = cd.v[i], depth[n] = d, idx[n++] = i;
+        const bb_vert *v = &buf[cur][i];
+        mk_real d = rr - (sgn * v->x[2] - hh[k]);
+        x[n] = v->x[0], y[n] = v->x[1], depth[n] = d, idx[n] = i;
+        n += d >= -margin;
     }
     if (reduce && n > MK_MANIFOLD_MAX_POINTS) {
         n = mk_mf_pick4(n, x, y, depth, pick);
@@ -438,10 +260,10 @@ MK_ALWAYS_INLINE int box_clip(const mk_pair *p, int ref_is_a, int face, mk_real 
         for (i = 0; i < n; ++i) pick[i] = i;
     }
     for (i = 0; i < n; ++i) {
-        int at = idx[pick[i]];
-        mk_real c[3], w = sgn * cd.z[at] - hh[k];
-        uint32_t key = cd.key[at], features = ref_is_a ? key >> 16 | key << 16 : key;
-        c[iu] = cd.u[at], c[iv] = cd.v[at], c[k] = cd.z[at];
+        const bb_vert *v = &buf[cur][idx[pick[i]]];
+        mk_real c[3], w = sgn * v->x[2] - hh[k];
+        uint32_t features = ref_is_a ? MK_FEATURE_PAIR(v->fref, v->finc) : MK_FEATURE_PAIR(v->finc, v->fref);
+        c[iu] = v->x[0], c[iv] = v->x[1], c[k] = v->x[2];
         if (o->m) {
             /* q is a point of the incident core. Reference A: la is q on
              * A's face pushed out by A's radius, lb = R^T (q - t) - rb
@@ -524,8 +346,8 @@ MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_
           mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] - mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
     sep /= mk_sqrt_(ok ? l2 : 1);
     better = ok & (sep > best->sep);
-    best->i = better ? i : best->i;
-    best->j = better ? j : best->j;
+    best->i = mk_sel_int(better, i, best->i);
+    best->j = mk_sel_int(better, j, best->j);
     best->sep = mk_max(best->sep, ok ? sep : -MK_REAL_MAX);
 }
 
@@ -572,6 +394,7 @@ static mk_real edge_sep_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat
     a[0] = ha->x, a[1] = ha->y, a[2] = ha->z;
     b[0] = hb->x, b[1] = hb->y, b[2] = hb->z;
     best.sep = -MK_REAL_MAX;
+    best.i = best.j = -1;
     box_edge_axis(r, ar, a, b, d, i, j, &best);
     return best.sep;
 }
@@ -586,7 +409,7 @@ static mk_real edge_sep_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat
 MK_ALWAYS_INLINE void box_face_a(mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i, mk_real *best, int *at)
 {
     mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
-    *at = sep > *best ? i : *at;
+    *at = mk_sel_int(sep > *best, i, *at);
     *best = mk_max(*best, sep);
 }
 
@@ -596,7 +419,7 @@ MK_ALWAYS_INLINE void box_face_b(mk_real r[3][3], mk_real ar[3][3], const mk_rea
     mk_real sep;
     db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
     sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
-    *at = sep > *best ? j : *at;
+    *at = mk_sel_int(sep > *best, j, *at);
     *best = mk_max(*best, sep);
 }
 
@@ -667,6 +490,21 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
     sat_boxes(ha, hb, R, t, opt, out);
 }
 
+/* Midpoint of box edge `id` (minko/manifold.h numbering): 0 along its
+ * axis, +-h along the other two by the id's bits, as the mean of its two
+ * ends would be; by factors of +-1, since the edge is data. */
+MK_ALWAYS_INLINE mk_vec3 box_edge_mid(mk_vec3 h, int id)
+{
+    static const mk_real sign[2] = {-1, 1};
+    static const unsigned char lo_of[3] = {1, 0, 0}, hi_of[3] = {2, 2, 1};
+    int axis = id / 4;
+    mk_real c[3];
+    c[lo_of[axis]] = sign[id & 1];
+    c[hi_of[axis]] = sign[(id >> 1) & 1];
+    c[axis] = 0;
+    return mk_v3(c[0] * h.x, c[1] * h.y, c[2] * h.z);
+}
+
 /* The one contact of an edge-pair axis of two boxes: mk_mf_edge_contact's
  * answer from the edges' midpoints and unit axes, A's edge s e_i about ma
  * (|s| <= h_i), B's c + t R_j about mb (|t| <= g_j, c = mb - ma), which
@@ -674,13 +512,10 @@ void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const m
 static mk_real box_edge_contact(const mk_pair *p, int ea, int eb, mk_real sep, mk_real rr, mk_vec3 *qa, mk_feature *fa, mk_feature *fb)
 {
     int ia = mk_box_hull_edge_id(ea), ib = mk_box_hull_edge_id(eb), i = ia / 4, j = ib / 4;
-    mk_vec3 a0, a1, b0, b1, ma, mb, c, rj = *column(&p->r, j), q;
+    mk_vec3 ma, mb, c, rj = *column(&p->r, j), q;
     mk_real ha[3], cc[3], x[3], s, t;
-    mk_box_edge_ends(p->a->u.half_extents, ia, &a0, &a1);
-    mk_box_edge_ends(p->b->u.half_extents, ib, &b0, &b1);
-    /* Midpoints: the ends differ only along the edge's own axis. */
-    ma = mk_v3_scale(mk_v3_add(a0, a1), MK_REAL(0.5));
-    mb = mk_v3_add(mk_mat3_mul_v3(p->r, mk_v3_scale(mk_v3_add(b0, b1), MK_REAL(0.5))), p->t);
+    ma = box_edge_mid(p->a->u.half_extents, ia);
+    mb = mk_v3_add(mk_mat3_mul_v3(p->r, box_edge_mid(p->b->u.half_extents, ib)), p->t);
     c = mk_v3_sub(mb, ma);
     ha[0] = p->a->u.half_extents.x, ha[1] = p->a->u.half_extents.y, ha[2] = p->a->u.half_extents.z;
     cc[0] = c.x, cc[1] = c.y, cc[2] = c.z;

@@ -119,6 +119,10 @@ mk_feature mk_box_edge(int corner_i, int corner_j);
 
 /* Corner `bits` (zyx, set = +extent) of the box of half-extents h, and
  * the two ends of box edge `id` (minko/manifold.h numbering). */
+/* c ? a : b for c = 0 or 1, in arithmetic: which candidate or axis wins
+ * is data the branch predictor cannot learn. */
+MK_ALWAYS_INLINE int mk_sel_int(int c, int a, int b) { return b ^ ((a ^ b) & -c); }
+
 /* The smallest component of v (a box's thinnest half extent). */
 static inline mk_real mk_v3_min_comp(mk_vec3 v) { return mk_min(v.x, mk_min(v.y, v.z)); }
 
@@ -205,7 +209,7 @@ static inline mk_real mk_mf_edge_contact(const mk_pair *p, int ea, int eb, mk_re
 /* ---- two boxes (box_box.c) ---- */
 
 /* Most candidates of a box face clip (4 corners, at most one more per side
- * pass; 4 + 8 + 4 when counted by kind). */
+ * pass; room to spare for round-off). */
 #define MK_BB_CLIP_MAX 16
 
 /* A candidate of a box-face clip: the incident core point q in the
@@ -222,11 +226,9 @@ typedef struct mk_bb_point {
  * face of the other box, done in the reference face's 2D coordinates: the
  * candidates mk_mf_clip would give for mk_box_face against the
  * mk_support_feature of the other box along the face's normal, with the
- * same IDs, clip slop `slop` (a fraction of the reference side), those
- * deeper than -margin, in box_box.c's fixed order of the features
- * (reference corners, crossings by incident edge then reference side,
- * incident corners; tests/support/clip_order.h); with `reduce`, the four
- * mk_mf_pick4 keeps of them in the face's coordinates. Returns the count. */
+ * same IDs, in the same order, clip slop `slop` (a fraction of the
+ * reference side), those deeper than -margin; with `reduce`, the four
+ * mk_mf_pick4 keeps in the face's coordinates. Returns the count. */
 int mk_box_box_clip(const mk_pair *p, int ref_is_a, int face, mk_real slop, mk_real margin, int reduce, mk_bb_point *out);
 
 /* mk_collide_pose of two boxes after its checks, in one pass: last

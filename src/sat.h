@@ -115,9 +115,9 @@ mk_sat_options mk_sat_defaults(void);
 static inline mk_sat_kind mk_sat_choose(mk_real sa, mk_real sb, mk_real se, int edge_found, int stopped, const mk_sat_options *opt,
                                         mk_sat_result *out)
 {
-    mk_real ps = sa;
-    mk_sat_kind kind = MK_SAT_FACE_A;
-    if (sb > ps) ps = sb, kind = MK_SAT_FACE_B;
+    /* A select, not a branch: which face kind wins is data. */
+    mk_real ps = mk_max(sb, sa);
+    mk_sat_kind kind = (mk_sat_kind)(MK_SAT_FACE_A + (sb > sa));
     out->best = mk_max(ps, se);
     out->complete = !stopped;
     if (stopped || opt->prefer == MK_SAT_NONE) {

@@ -2,10 +2,8 @@
  * against an oracle assembled here from the general pieces it replaces:
  * mk_sat_box_box with the same options, an edge pair parallel to a face
  * named as that face, the general polygon clip of mk_box_face against the
- * other box's mk_support_feature (mk_mf_clip), its candidates put in the
- * order box_box.c documents (support/clip_order.h, from the features'
- * geometry), mk_mf_reduce, the edges' closest points, and the move to
- * world space written out. Cold calls and warm sequences in both
+ * other box's mk_support_feature (mk_mf_clip), mk_mf_reduce, the edges'
+ * closest points, and the move to world space written out. Cold calls and warm sequences in both
  * mk_manifold_modes, rounded boxes, margins: the same count, feature IDs
  * in the same order, normals, depths and all four points to rounding. */
 #include <string.h>
@@ -14,7 +12,6 @@
 #include "polytope.h"
 #include "pose.h"
 #include "sat.h"
-#include "support/clip_order.h"
 #include "support/mk_test.h"
 
 #if defined(MK_SINGLE)
@@ -98,14 +95,12 @@ static int oracle(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const
         mk_support_feature(b, mk_mat3_tmul_v3(p.r, mk_v3_neg(s.normal)), &inc);
         mk_feat_transform(&inc, &p);
         mk_mf_clip(&m, &ref, 1, &inc, ra, rb);
-        mk_test_clip_sort(&m, s.a, MK_FEATURE_GET_INDEX(inc.id), 1);
     } else if (s.kind == MK_SAT_FACE_B) {
         mk_feat ref, inc;
         mk_box_face(b, s.b / 2, s.b & 1, &ref);
         mk_feat_transform(&ref, &p);
         mk_support_feature(a, s.normal, &inc);
         mk_mf_clip(&m, &ref, 0, &inc, ra, rb);
-        mk_test_clip_sort(&m, s.b, MK_FEATURE_GET_INDEX(inc.id), 0);
     } else {
         mk_vec3 a0, a1, b0, b1, qa;
         mk_real u, v, gap = s.separation;

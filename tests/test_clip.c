@@ -1,8 +1,7 @@
 /* test_clip.c: the two boxes' face clip (mk_box_box_clip, box_box.c)
- * against the general polygon clip (mk_mf_clip on mk_box_face polygons),
- * whose candidates are put in the order box_box.c documents
- * (support/clip_order.h): the same candidates, in the same order, with
- * the same feature IDs, positions and
+ * against the general polygon clip (mk_mf_clip on mk_box_face polygons) it
+ * specialises: the same
+ * candidates, in the same order, with the same feature IDs, positions and
  * depths, on random poses, stacked boxes (corners on the side planes, where
  * the slop decides) and rounded boxes apart, with the clip slop of either
  * mk_manifold_mode; and reduced to four in the reference face's own
@@ -12,7 +11,6 @@
 #include "gjk.h"
 #include "manifold_internal.h"
 #include "pose.h"
-#include "support/clip_order.h"
 #include "support/mk_test.h"
 
 #if defined(MK_SINGLE)
@@ -49,7 +47,6 @@ static void general(const mk_pair *p, int ref_is_a, int face, mk_mf *m)
         mk_support_feature(p->a, m->normal, &inc);
     }
     mk_mf_clip(m, &ref, ref_is_a, &inc, ra, rb);
-    mk_test_clip_sort(m, face, MK_FEATURE_GET_INDEX(inc.id), ref_is_a);
 }
 
 /* Compares the two clips of one pose and reference; returns the candidate count. */

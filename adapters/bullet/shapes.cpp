@@ -71,7 +71,8 @@ mk_status map_primitive(const btCollisionShape *shape, ShapeMap *out)
     return st;
 }
 
-mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map, bool *changed)
+// refresh_map less its inline case (an unchanged box).
+mk_status detail::refresh_changed(const btCollisionShape *shape, ShapeMap *map, bool *changed)
 {
     if (changed) *changed = false;
     // Every step for every pair: compare the few numbers that define the
@@ -81,13 +82,6 @@ mk_status refresh_map(const btCollisionShape *shape, ShapeMap *map, bool *change
     case SPHERE_SHAPE_PROXYTYPE:
         if (static_cast<const btSphereShape *>(shape)->getRadius() == m.radius) return MK_OK;
         break;
-    case BOX_SHAPE_PROXYTYPE: {
-        // getHalfExtentsWithMargin() less its three virtual getMargin() calls.
-        const btScalar margin = shape->getMargin();
-        const btVector3 h = static_cast<const btBoxShape *>(shape)->getHalfExtentsWithoutMargin() + btVector3(margin, margin, margin);
-        if (h.x() == m.u.half_extents.x && h.y() == m.u.half_extents.y && h.z() == m.u.half_extents.z) return MK_OK;
-        break;
-    }
     case CONVEX_HULL_SHAPE_PROXYTYPE: {
         const btScalar margin = shape->getMargin();
         if (margin == m.radius) return MK_OK;

@@ -2191,6 +2191,185 @@ START_TEST(np_pose_cache_sees_one_ulp)
 }
 END_TEST
 
+// Pairs that part end with the manifold Bullet's own algorithms leave:
+// every cached point dropped; pairs found farther apart than the contact
+// breaking threshold without mk_collide (the bounding test, and for two
+// boxes the face axis that held them apart) have none, and touching pairs
+// are never skipped. Per shape pair, B beside A along x in two worlds
+// (Minko's narrowphase, Bullet's), the pair kept by fat boxes: pass 0 AABBs
+// overlapping by 0.05, pass 1 AABBs 1.5 thresholds apart (no point in
+// either world), pass 2 0.5 threshold apart (the shapes still farther apart
+// than the threshold: skipped for boxes and spheres), pass 3 touching again.
+START_TEST(np_far_pairs_drop_points)
+{
+    btBoxShape box(btVector3(btScalar(0.5), btScalar(0.7), btScalar(0.4)));
+    btSphereShape sphere(btScalar(0.5));
+    btCapsuleShape capsule(btScalar(0.3), btScalar(0.8));
+    btConvexHullShape hull;
+    for (int i = 0; i < 8; i++)
+        hull.addPoint(btVector3(i & 1 ? btScalar(0.6) : btScalar(-0.6), i & 2 ? btScalar(0.5) : btScalar(-0.5),
+                                i & 4 ? btScalar(0.4) : btScalar(-0.4)), i == 7);
+    btCollisionShape *shapes[] = {&box, &sphere, &capsule, &hull};
+    int touching = 0, skipped_far = 0;
+    for (btCollisionShape *sa : shapes) {
+        for (btCollisionShape *sb : shapes) {
+            mkb::CollisionConfiguration mine;
+            btDefaultCollisionConfiguration native_config;
+            btCollisionDispatcher d_mine(&mine), d_native(&native_config);
+            mkb::Broadphase bp_mine(MK_BP_SAP, nullptr, 64, 1), bp_native(MK_BP_SAP, nullptr, 64, 1);
+            btCollisionWorld w_mine(&d_mine, &bp_mine, &mine), w_native(&d_native, &bp_native, &native_config);
+            btCollisionObject a[2], b[2];
+            btCollisionWorld *worlds[2] = {&w_mine, &w_native};
+            btScalar shift = 0, threshold = 0;
+            bool touched = false;
+            for (int k = 0; k < 2; k++) {
+                a[k].setCollisionShape(sa);
+                b[k].setCollisionShape(sb);
+                a[k].setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, 0, 0)));
+                b[k].setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(5, 0, 0)));
+                worlds[k]->addCollisionObject(&a[k]);
+                worlds[k]->addCollisionObject(&b[k]);
+            }
+            for (int pass = 0; pass < 4; pass++) {
+                // B's x for this pass from the gap of its AABB to A's (Bullet's boxes).
+                if (pass == 0) {
+                    w_mine.updateAabbs();
+                    const btScalar a_hi = a[0].getBroadphaseHandle()->m_aabbMax.x(), b_lo = b[0].getBroadphaseHandle()->m_aabbMin.x();
+                    shift = b[0].getWorldTransform().getOrigin().x() - (b_lo - a_hi);  // x of B at AABB gap 0
+                }
+                const btScalar gap = pass == 1 ? btScalar(1.5) * threshold : pass == 2 ? btScalar(0.5) * threshold : btScalar(-0.05);
+                for (int k = 0; k < 2; k++) b[k].getWorldTransform().setOrigin(btVector3(shift + gap, 0, 0));
+                const long skips = mine.stats.skipped.load();
+                int points[2];
+                for (int k = 0; k < 2; k++) {
+                    worlds[k]->performDiscreteCollisionDetection();
+                    ck_assert_int_eq(worlds[k]->getPairCache()->getNumOverlappingPairs(), 1);  // the fat boxes still meet
+                    btDispatcher *d = worlds[k]->getDispatcher();
+                    points[k] = 0;
+                    for (int m = 0; m < d->getNumManifolds(); m++) {
+                        points[k] += d->getManifoldByIndexInternal(m)->getNumContacts();
+                        if (k == 0 && pass == 0) threshold = d->getManifoldByIndexInternal(m)->getContactBreakingThreshold();
+                    }
+                }
+                ck_assert_msg(threshold > 0, "shapes %d-%d: no manifold", sa->getShapeType(), sb->getShapeType());
+                const bool skipped = mine.stats.skipped.load() > skips;
+                if (pass == 0 || pass == 3) ck_assert_msg(!skipped, "shapes %d-%d pass %d: touching pair skipped", sa->getShapeType(),
+                                                          sb->getShapeType(), pass);
+                if (pass == 0) touched = points[0] > 0;
+                if (pass == 3) ck_assert_int_eq(points[0] > 0, touched);
+                if (pass == 1) {
+                    ck_assert_int_eq(points[0], 0);
+                    ck_assert_int_eq(points[1], 0);
+                }
+                if (pass == 2) {
+                    if (skipped) ck_assert_int_eq(points[0], 0);
+                    skipped_far += skipped;
+                }
+            }
+            ck_assert_int_eq(mine.stats.collide_errors.load(), 0);
+            touching += touched;
+            for (int k = 0; k < 2; k++) {
+                worlds[k]->removeCollisionObject(&b[k]);
+                worlds[k]->removeCollisionObject(&a[k]);
+            }
+        }
+    }
+    ck_assert_int_ge(touching, 8);  // most pairs touch at pass 0: the drop is tested on real points
+    ck_assert_int_ge(skipped_far, 4);  // pairs skipped at pass 2: box-box and the sphere pairs at least
+}
+END_TEST
+
+// processCollision of one pair algorithm at each of the poses in turn (a
+// at xa[i], b at xb[i]); the manifold's point count after the last one.
+int collide_in_turn(mkb::CollisionConfiguration *config, btCollisionShape *a, btCollisionShape *b, const btTransform *xa,
+                    const btTransform *xb, int n)
+{
+    btCollisionDispatcher dispatcher(config);
+    btCollisionObject oa, ob;
+    oa.setCollisionShape(a);
+    ob.setCollisionShape(b);
+    oa.setWorldTransform(xa[0]);
+    ob.setWorldTransform(xb[0]);
+    btCollisionObjectWrapper wa0(nullptr, a, &oa, oa.getWorldTransform(), -1, -1), wb0(nullptr, b, &ob, ob.getWorldTransform(), -1, -1);
+    btCollisionAlgorithm *algo = dispatcher.findAlgorithm(&wa0, &wb0, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+    btDispatcherInfo info;
+    int points = 0;
+    for (int i = 0; i < n; i++) {
+        oa.setWorldTransform(xa[i]);
+        ob.setWorldTransform(xb[i]);
+        btCollisionObjectWrapper wa(nullptr, a, &oa, oa.getWorldTransform(), -1, -1), wb(nullptr, b, &ob, ob.getWorldTransform(), -1, -1);
+        btManifoldResult result(&wa, &wb);
+        algo->processCollision(&wa, &wb, info, &result);
+        btManifoldArray manifolds;
+        algo->getAllContactManifolds(manifolds);
+        points = 0;
+        for (int m = 0; m < manifolds.size(); m++) points += manifolds[m]->getNumContacts();
+    }
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
+    return points;
+}
+
+// Two boxes, random sizes and turns, placed around contact after a step
+// farther apart along the same direction (so that a face axis kept them
+// apart): a pair step answered without mk_collide is one mk_collide (cold,
+// at the breaking threshold) finds no point for, and a pair mk_collide
+// finds touching gets its touching points. Boxes side by side along a face
+// normal, or turned, both near the threshold.
+START_TEST(np_box_pairs_skipped_only_when_apart)
+{
+    mkb::CollisionConfiguration mine;
+    mk_rng rng = {4242};
+    int skipped = 0, checked = 0, touching = 0;
+    for (int k = 0; k < 400; k++) {
+        const double s = k % 2 ? 1.0 : 0.05;  // unit boxes and 5 cm ones
+        btBoxShape a(btVector3((btScalar)(s * mk_rng_range(&rng, 0.2, 1)), (btScalar)(s * mk_rng_range(&rng, 0.2, 1)),
+                               (btScalar)(s * mk_rng_range(&rng, 0.2, 1))));
+        btBoxShape b(btVector3((btScalar)(s * mk_rng_range(&rng, 0.2, 1)), (btScalar)(s * mk_rng_range(&rng, 0.2, 1)),
+                               (btScalar)(s * mk_rng_range(&rng, 0.2, 1))));
+        const bool aligned = k % 4 < 2;
+        btTransform xa = random_pose(&rng, 3 * s), xb = random_pose(&rng, 0);
+        if (aligned) xb.setRotation(xa.getRotation());  // side by side along a face normal of A
+        const int axis = (int)(mk_rng_range(&rng, 0, 3)) % 3;
+        const double threshold = std::min(a.getContactBreakingThreshold(gContactBreakingThreshold),
+                                          b.getContactBreakingThreshold(gContactBreakingThreshold));
+        // Offset along A's face axis: touching when the extents along it add
+        // up; around contact within a few thresholds.
+        const btVector3 dir = xa.getBasis().getColumn(axis);
+        const btVector3 hb = b.getHalfExtentsWithMargin();
+        const double reach = a.getHalfExtentsWithMargin()[axis] + std::fabs(xb.getBasis().getColumn(0).dot(dir)) * hb.x() +
+                             std::fabs(xb.getBasis().getColumn(1).dot(dir)) * hb.y() +
+                             std::fabs(xb.getBasis().getColumn(2).dot(dir)) * hb.z();
+        const btTransform xas[2] = {xa, xa};
+        btTransform xbs[2] = {xb, xb};
+        xbs[0].setOrigin(xa.getOrigin() + dir * (btScalar)(reach + 4 * threshold));
+        xbs[1].setOrigin(xa.getOrigin() + dir * (btScalar)(reach + threshold * mk_rng_range(&rng, -2, 3)));
+        const long before = mine.stats.skipped.load();
+        collide_in_turn(&mine, &a, &b, xas, xbs, 1);
+        const long after_first = mine.stats.skipped.load();
+        const int got = collide_in_turn(&mine, &a, &b, xas, xbs, 2);
+        const bool was_skipped = mine.stats.skipped.load() - after_first > after_first - before;  // the second step's
+        mkb::ShapeMap ma, mb;
+        ck_assert_int_eq(mine.map_shape(&a, &ma), MK_OK);
+        ck_assert_int_eq(mine.map_shape(&b, &mb), MK_OK);
+        mk_manifold direct;
+        ck_assert_int_eq(mk_collide(&ma.shape, mkb::minko_pose(xas[1], ma), &mb.shape, mkb::minko_pose(xbs[1], mb),
+                                    (mk_real)threshold, nullptr, &direct),
+                         MK_OK);
+        int touching_points = 0;
+        for (int j = 0; j < direct.count; j++) touching_points += direct.points[j].depth >= 0;
+        if (was_skipped) ck_assert_msg(direct.count == 0, "case %d skipped with %d points within the threshold", k, direct.count);
+        ck_assert_msg(got == touching_points, "case %d: %d points, mk_collide %d touching", k, got, touching_points);
+        skipped += was_skipped;
+        touching += touching_points > 0;
+        checked++;
+    }
+    ck_assert_int_gt(skipped, 80);
+    ck_assert_int_gt(touching, 80);
+    ck_assert_int_gt(checked - skipped - touching, 20);  // near but not touching, not skipped: mk_collide's to answer
+}
+END_TEST
+
 // ---- continuous collision -----------------------------------------------------
 
 // One world of a given kind with gravity off; bodies owned by the caller.
@@ -2373,6 +2552,8 @@ Suite *suite()
     suite_add_tcase(s, n);
     TCase *pc = tcase_create("pose_cache");
     tcase_add_test(pc, np_pose_cache_sees_one_ulp);
+    tcase_add_test(pc, np_far_pairs_drop_points);
+    tcase_add_test(pc, np_box_pairs_skipped_only_when_apart);
     suite_add_tcase(s, pc);
     TCase *c = tcase_create("ccd");
     tcase_set_timeout(c, 60);

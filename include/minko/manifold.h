@@ -10,9 +10,8 @@
  * depth >= -margin are reported; those with depth < 0 carry
  * MK_CONTACT_SPECULATIVE. When more than four candidate points exist (clipped
  * faces, cylinder rims) the deepest is kept first, then the points that
- * maximise the contact area; the choice favours earlier candidates (for two
- * boxes, in a fixed order of their features) by a small margin so it does
- * not flicker between frames. Feature IDs are stable while
+ * maximise the contact area; the choice favours earlier candidates by a small
+ * margin so it does not flicker between frames. Feature IDs are stable while
  * the same features touch, so a host can key its warm-start cache on them
  * (minko/contact_cache.h). An optional caller-owned mk_manifold_cache per
  * pair (zero-initialised = cold) carries the previous frame's choices: for
@@ -58,11 +57,11 @@
  * that need them. Box and hull pairs whose bounding balls are farther apart
  * than the margin return before anything else. Complexity per call: O(1)
  * for the closed forms and for two boxes (src/box_box.c: one pass, a pair
- * apart along last frame's separating axis tests only that axis; about
- * 2.7k instructions per mk_collide_pose on tilted stacked boxes, 2.1k on
- * random overlaps, 0.2k on separated boxes whose bounding boxes overlap,
- * demos/bench_contacts --quick under callgrind; box_box.c says where they
- * go);
+ * apart along last frame's separating axis tests only that axis; per
+ * mk_collide_pose about 0.8 of the time of ODE's dBoxBox in the same run
+ * on tilted stacked boxes and on random overlaps, 0.53 on separated boxes
+ * whose bounding boxes overlap, demos/bench_contacts (2.9k, 2.2k and 0.2k
+ * instructions under callgrind); box_box.c says where the time goes);
  * for hulls SAT's O(F_A S_B + F_B S_A +
  * E_A E_B) (src/sat.h) plus O(n + m) clipping of faces with n and m (at most
  * 32) vertices; GJK/EPA pairs are bounded by their iteration caps.
