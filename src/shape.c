@@ -43,7 +43,9 @@ mk_status mk_shape_validate(const mk_shape *s)
     case MK_SHAPE_PLANE:
         if (!mk_v3_is_valid(s->u.plane.normal) || !mk_real_is_valid(s->u.plane.offset)) return MK_ERR_NOT_FINITE;
         if (!(mk_fabs_(mk_v3_len2(s->u.plane.normal) - 1) <= MK_QUAT_TOLERANCE)) return MK_ERR_BAD_NORMAL;
-        return MK_OK;
+        /* The offset is a coordinate along the normal: beyond MK_MAX_COORD the
+         * pair-frame bound of math3d.h no longer holds for the plane queries. */
+        return mk_fabs_(s->u.plane.offset) <= MK_MAX_COORD ? MK_OK : MK_ERR_OUT_OF_RANGE;
     default: return MK_ERR_BAD_SHAPE;
     }
 }

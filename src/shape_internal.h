@@ -60,7 +60,7 @@ MK_ALWAYS_INLINE int mk_shape_ok_typed_(const mk_shape *s, mk_shape_type t)
     case MK_SHAPE_HULL: return mk_rounding_ok_(r) && s->u.hull && s->u.hull->vertex_count >= 4 && s->u.hull->face_count >= 4;
     case MK_SHAPE_PLANE: { /* the rounding radius of a plane is not used */
         mk_vec3 n = s->u.plane.normal;
-        return mk_v3_is_valid(n) && mk_real_is_valid(s->u.plane.offset) && mk_fabs_(mk_v3_len2(n) - 1) <= MK_QUAT_TOLERANCE;
+        return mk_v3_is_valid(n) && mk_fabs_(s->u.plane.offset) <= MK_MAX_COORD && mk_fabs_(mk_v3_len2(n) - 1) <= MK_QUAT_TOLERANCE;
     }
     default: return 0;
     }

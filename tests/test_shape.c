@@ -23,6 +23,8 @@ START_TEST(constructors_reject_bad_sizes)
     MK_ASSERT_STATUS(mk_shape_plane(mk_v3(0, 0, 2), 0, &s), MK_ERR_BAD_NORMAL);
     MK_ASSERT_STATUS(mk_shape_plane(mk_v3(0, 0, 0), 0, &s), MK_ERR_BAD_NORMAL);
     MK_ASSERT_STATUS(mk_shape_plane(mk_v3(0, 0, 1), (mk_real)NAN, &s), MK_ERR_NOT_FINITE);
+    MK_ASSERT_STATUS(mk_shape_plane(mk_v3(0, 0, 1), 2 * MK_MAX_COORD, &s), MK_ERR_OUT_OF_RANGE);
+    MK_ASSERT_STATUS(mk_shape_plane(mk_v3(0, 0, 1), -2 * MK_MAX_COORD, &s), MK_ERR_OUT_OF_RANGE);
     MK_ASSERT_STATUS(mk_shape_sphere(1, NULL), MK_ERR_NULL);
     MK_ASSERT_STATUS(mk_shape_validate(NULL), MK_ERR_NULL);
     ck_assert_int_eq(s.type, MK_SHAPE_TYPE_COUNT);

@@ -95,7 +95,8 @@ MK_API mk_status mk_shape_capsule(mk_real radius, mk_real half_height, mk_shape 
 MK_API mk_status mk_shape_cylinder(mk_real radius, mk_real half_height, mk_real rounding, mk_shape *out);
 MK_API mk_status mk_shape_cone(mk_real radius, mk_real half_height, mk_real rounding, mk_shape *out);
 MK_API mk_status mk_shape_hull(const mk_hull *hull, mk_real rounding, mk_shape *out);
-/* `normal` must be unit length within MK_QUAT_TOLERANCE; it is renormalised. */
+/* `normal` must be unit length within MK_QUAT_TOLERANCE; it is renormalised.
+ * |offset| <= MK_MAX_COORD, else MK_ERR_OUT_OF_RANGE. */
 MK_API mk_status mk_shape_plane(mk_vec3 normal, mk_real offset, mk_shape *out);
 
 /* Checks a shape however it was made. */
