@@ -775,6 +775,30 @@ public:
     Run(const Run &) = delete;
     Run &operator=(const Run &) = delete;
 
+    // Identical-pose mode (--shadow): before each step this run's dynamic
+    // bodies take the other run's state (pose, velocities, sleep), so its
+    // collision pipeline meets the other's poses and its solver starts from
+    // the other's state; only the contacts and their warm-start history
+    // (what each pipeline's manifolds carried over) differ.
+    void take_state_of(const Run &from)
+    {
+        for (size_t i = 0; i < m_bodies.size(); i++) {
+            btRigidBody *d = m_bodies[i];
+            const btRigidBody *s = from.m_bodies[i];
+            if (d->getInvMass() == 0) continue;
+            d->setCenterOfMassTransform(s->getCenterOfMassTransform());
+            d->setInterpolationWorldTransform(s->getInterpolationWorldTransform());
+            d->setLinearVelocity(s->getLinearVelocity());
+            d->setAngularVelocity(s->getAngularVelocity());
+            d->setInterpolationLinearVelocity(s->getInterpolationLinearVelocity());
+            d->setInterpolationAngularVelocity(s->getInterpolationAngularVelocity());
+            d->forceActivationState(s->getActivationState());
+            d->setDeactivationTime(s->getDeactivationTime());
+        }
+    }
+    btDiscreteDynamicsWorld *world() const { return m_pipe.world; }
+    const std::vector<btRigidBody *> &bodies() const { return m_bodies; }
+
     void step(int step)
     {
         btDiscreteDynamicsWorld *world = m_pipe.world;
@@ -945,6 +969,260 @@ const char *verdict(const Result::Spread &m, const Result::Spread &native)
     return d < 0 ? "better" : "worse";
 }
 
+// ---- identical-pose comparison (--shadow) -----------------------------------------
+
+// Per pair type, what a backend's contacts do differently from native's on
+// the same poses: each step the backend's bodies take native's state
+// (Run::take_state_of), both step, and their manifolds are compared pair by
+// pair (after the solve: points, impulses and lifetimes as the solver left
+// them). A pair is keyed by its two bodies' world indices, low first; normals
+// and points are turned to that order (normal towards the low body, point on
+// the high one).
+struct ShadowStats {
+    long both = 0, only_native = 0, only_other = 0;
+    double pts[2] = {0, 0}, impulse[2] = {0, 0}, lateral[2] = {0, 0}, fresh[2] = {0, 0}, life[2] = {0, 0};
+    long normal_differs = 0;
+    double depth_diff = 0, depth_absdiff = 0, nearest = 0;
+    long nearest_n = 0;
+};
+
+struct ShadowPair {
+    const btPersistentManifold *m;
+    bool low_first;  // body 0 is the pair's low index
+};
+
+// Worst disagreement seen: the pair, the step and both bodies' poses, to
+// re-run the pair alone.
+struct ShadowWorst {
+    double score = -1;  // depth gap, or angle between the normals
+    int step = -1, lo = -1, hi = -1;
+    double depth[2] = {0, 0};
+    btVector3 normal[2];
+    btTransform xf[2];
+    int pts[2] = {0, 0};
+};
+
+struct Shadow {
+    std::map<std::string, ShadowStats> by_type;
+    double ke_native = 0, ke_other = 0, dv_max = 0;
+    double late_ke_native = 0, late_ke_other = 0;  // the last third of the steps, where a pile settles
+    long steps = 0, late_steps = 0;
+    // Bodies below Bullet's sleeping thresholds before the step: their KE
+    // after it, and how many of them the step woke (jitter a pile cannot
+    // fall asleep through).
+    double rest_ke[2] = {0, 0};
+    long rest_bodies = 0, rest_woken[2] = {0, 0};
+    ShadowWorst worst_depth, worst_normal;  // normal: pairs both see deeper than 1e-3
+};
+
+std::map<std::pair<int, int>, ShadowPair> shadow_pairs(btCollisionWorld *world)
+{
+    std::map<std::pair<int, int>, ShadowPair> out;
+    btDispatcher *d = world->getDispatcher();
+    for (int k = 0; k < d->getNumManifolds(); k++) {
+        const btPersistentManifold *m = d->getManifoldByIndexInternal(k);
+        if (m->getNumContacts() == 0) continue;
+        const int i0 = m->getBody0()->getWorldArrayIndex(), i1 = m->getBody1()->getWorldArrayIndex();
+        out[std::make_pair(std::min(i0, i1), std::max(i0, i1))] = ShadowPair{m, i0 < i1};
+    }
+    return out;
+}
+
+std::string shadow_type(const btCollisionObject *a, const btCollisionObject *b)
+{
+    std::string ta = a->getCollisionShape()->getName(), tb = b->getCollisionShape()->getName();
+    if (tb < ta) std::swap(ta, tb);
+    return ta + "-" + tb + (a->isStaticObject() || b->isStaticObject() ? " (static)" : "");
+}
+
+// The deepest point's index, and the manifold's impulse sums.
+int deepest_point(const btPersistentManifold *m)
+{
+    int best = 0;
+    for (int i = 1; i < m->getNumContacts(); i++)
+        if (m->getContactPoint(i).getDistance() < m->getContactPoint(best).getDistance()) best = i;
+    return best;
+}
+
+btVector3 point_on_high(const ShadowPair &p, int i)
+{
+    const btManifoldPoint &c = p.m->getContactPoint(i);
+    return p.low_first ? c.getPositionWorldOnB() : c.getPositionWorldOnA();
+}
+
+// Whether a body is below its sleeping thresholds (btRigidBody::wantsSleeping's test).
+bool below_sleep_thresholds(const btRigidBody *b)
+{
+    const btScalar lin = b->getLinearSleepingThreshold(), ang = b->getAngularSleepingThreshold();
+    return b->getLinearVelocity().length2() < lin * lin && b->getAngularVelocity().length2() < ang * ang;
+}
+
+// `resting`: per body, whether native's was below its sleeping thresholds
+// before the step (the state both worlds started from).
+void shadow_compare(const Run &native, const Run &other, int step, bool late, const std::vector<char> &resting,
+                    Shadow *sh)
+{
+    const Run *runs[2] = {&native, &other};
+    for (size_t i = 0; i < resting.size(); i++) {
+        if (!resting[i]) continue;
+        sh->rest_bodies++;
+        for (int w = 0; w < 2; w++) {
+            std::vector<btRigidBody *> one(1, runs[w]->bodies()[i]);
+            sh->rest_ke[w] += kinetic_energy(one);
+            sh->rest_woken[w] += !below_sleep_thresholds(one[0]);
+        }
+    }
+    const double ke[2] = {kinetic_energy(native.bodies()), kinetic_energy(other.bodies())};
+    sh->steps++;
+    sh->ke_native += ke[0];
+    sh->ke_other += ke[1];
+    if (late) {
+        sh->late_steps++;
+        sh->late_ke_native += ke[0];
+        sh->late_ke_other += ke[1];
+    }
+    for (size_t i = 0; i < native.bodies().size(); i++) {
+        const btRigidBody *a = native.bodies()[i], *b = other.bodies()[i];
+        sh->dv_max = std::max(sh->dv_max, (double)(a->getLinearVelocity() - b->getLinearVelocity()).length());
+    }
+    std::map<std::pair<int, int>, ShadowPair> pn = shadow_pairs(native.world()), po = shadow_pairs(other.world());
+    for (auto &kv : pn) po.insert(std::make_pair(kv.first, ShadowPair{nullptr, true}));
+    for (auto &kv : po) {
+        auto itn = pn.find(kv.first);
+        const ShadowPair *pair[2] = {itn == pn.end() ? nullptr : &itn->second, kv.second.m ? &kv.second : nullptr};
+        const ShadowPair *any = pair[0] ? pair[0] : pair[1];
+        ShadowStats &st = sh->by_type[shadow_type(any->m->getBody0(), any->m->getBody1())];
+        if (!pair[0] || !pair[1]) {
+            (pair[0] ? st.only_native : st.only_other)++;
+            continue;
+        }
+        st.both++;
+        double depth[2];
+        btVector3 normal[2];
+        for (int w = 0; w < 2; w++) {
+            const btPersistentManifold *m = pair[w]->m;
+            st.pts[w] += m->getNumContacts();
+            for (int i = 0; i < m->getNumContacts(); i++) {
+                const btManifoldPoint &c = m->getContactPoint(i);
+                st.impulse[w] += c.getAppliedImpulse();
+                st.lateral[w] += std::sqrt(c.m_appliedImpulseLateral1 * c.m_appliedImpulseLateral1 +
+                                           c.m_appliedImpulseLateral2 * c.m_appliedImpulseLateral2);
+                st.fresh[w] += c.getLifeTime() <= 1;
+                st.life[w] += c.getLifeTime();
+            }
+            const btManifoldPoint &c = m->getContactPoint(deepest_point(m));
+            depth[w] = -(double)c.getDistance();
+            normal[w] = pair[w]->low_first ? c.m_normalWorldOnB : -c.m_normalWorldOnB;
+        }
+        const bool differs = normal[0].dot(normal[1]) < btScalar(1 - 5e-7);  // about 1e-3 rad
+        st.normal_differs += differs;
+        st.depth_diff += depth[1] - depth[0];
+        st.depth_absdiff += std::fabs(depth[1] - depth[0]);
+        for (int i = 0; i < pair[0]->m->getNumContacts(); i++) {
+            double best = 1e300;
+            for (int j = 0; j < pair[1]->m->getNumContacts(); j++)
+                best = std::min(best, (double)(point_on_high(*pair[0], i) - point_on_high(*pair[1], j)).length());
+            st.nearest += best;
+            st.nearest_n++;
+        }
+        const double angle = std::acos(std::min(1.0, std::max(-1.0, (double)normal[0].dot(normal[1]))));
+        const double scores[2] = {std::fabs(depth[1] - depth[0]), std::min(depth[0], depth[1]) > 1e-3 ? angle : -1};
+        ShadowWorst *worst[2] = {&sh->worst_depth, &sh->worst_normal};
+        for (int k = 0; k < 2; k++) {
+            if (scores[k] <= worst[k]->score) continue;
+            ShadowWorst &w = *worst[k];
+            w.score = scores[k];
+            w.step = step;
+            w.lo = kv.first.first;
+            w.hi = kv.first.second;
+            for (int j = 0; j < 2; j++) {
+                w.depth[j] = depth[j];
+                w.normal[j] = normal[j];
+                w.pts[j] = pair[j]->m->getNumContacts();
+                w.xf[j] = native.bodies()[(size_t)(j ? w.hi : w.lo)]->getWorldTransform();
+            }
+        }
+    }
+}
+
+// --shadow-pair LO HI STEP: every point of that pair in both worlds at that
+// step (after the solve), in the pair's low-first order.
+struct ShadowProbe {
+    int lo = -1, hi = -1, step = -1;
+};
+ShadowProbe g_probe;
+
+void shadow_dump(const Run &native, const Run &other, int step)
+{
+    if (step != g_probe.step) return;
+    const Run *runs[2] = {&native, &other};
+    for (int w = 0; w < 2; w++) {
+        std::map<std::pair<int, int>, ShadowPair> pairs = shadow_pairs(runs[w]->world());
+        auto it = pairs.find(std::make_pair(g_probe.lo, g_probe.hi));
+        std::printf("  step %d pair %d-%d %s:%s\n", step, g_probe.lo, g_probe.hi, w ? "other" : "native",
+                    it == pairs.end() ? " no points" : "");
+        if (it == pairs.end()) continue;
+        const ShadowPair &p = it->second;
+        for (int i = 0; i < p.m->getNumContacts(); i++) {
+            const btManifoldPoint &c = p.m->getContactPoint(i);
+            const btVector3 q = point_on_high(p, i), n = p.low_first ? c.m_normalWorldOnB : -c.m_normalWorldOnB;
+            std::printf("    [%d] on_high (%.6f %.6f %.6f) n (%.5f %.5f %.5f) dist %.3e life %d imp %.4g lat %.4g %.4g "
+                        "part %d/%d idx %d/%d flags %d\n",
+                        i, (double)q.x(), (double)q.y(), (double)q.z(), (double)n.x(), (double)n.y(), (double)n.z(),
+                        (double)c.getDistance(), c.getLifeTime(), (double)c.getAppliedImpulse(),
+                        (double)c.m_appliedImpulseLateral1, (double)c.m_appliedImpulseLateral2, c.m_partId0, c.m_partId1,
+                        c.m_index0, c.m_index1, c.m_contactPointFlags);
+        }
+    }
+}
+
+void print_shadow(const SceneSpec &s, const std::string &backend, const Shadow &sh)
+{
+    std::printf("\nidentical poses: %s, %s against native, %ld steps (each step from native's state)\n", s.name.c_str(),
+                backend.c_str(), sh.steps);
+    std::printf("  KE after the step, mean over steps: native %.6g, %s %.6g (ratio %.4f); max |dv| of a body %.3g\n",
+                sh.ke_native / (double)std::max(1L, sh.steps), backend.c_str(), sh.ke_other / (double)std::max(1L, sh.steps),
+                sh.ke_native > 0 ? sh.ke_other / sh.ke_native : 0.0, sh.dv_max);
+    std::printf("  bodies at rest before a step (%ld body-steps): KE after it native %.6g, %s %.6g (ratio %.4f); "
+                "woken native %ld, %s %ld\n",
+                sh.rest_bodies, sh.rest_ke[0], backend.c_str(), sh.rest_ke[1], sh.rest_ke[0] > 0 ? sh.rest_ke[1] / sh.rest_ke[0] : 0.0,
+                sh.rest_woken[0], backend.c_str(), sh.rest_woken[1]);
+    std::printf("  the same over the last third (%ld steps): native %.6g, %s %.6g (ratio %.4f)\n", sh.late_steps,
+                sh.late_ke_native / (double)std::max(1L, sh.late_steps), backend.c_str(),
+                sh.late_ke_other / (double)std::max(1L, sh.late_steps),
+                sh.late_ke_native > 0 ? sh.late_ke_other / sh.late_ke_native : 0.0);
+    std::printf("  %-28s %9s %7s %7s %11s %11s %8s %10s %10s %9s %9s %9s %9s %8s %8s %8s %8s\n", "pair type", "both", "only_n",
+                "only_o", "pts n/o", "", "normal!=", "ddepth", "|ddepth|", "nearest", "imp n", "imp o", "lat n", "lat o",
+                "fresh n", "fresh o", "life n/o");
+    for (auto &kv : sh.by_type) {
+        const ShadowStats &t = kv.second;
+        const double b = (double)std::max(1L, t.both);
+        std::printf("  %-28s %9ld %7ld %7ld %11.3f %11.3f %8.4f %10.3g %10.3g %9.3g %9.4g %9.4g %9.4g %8.4g %8.3f %8.3f %.0f/%.0f\n",
+                    kv.first.c_str(), t.both, t.only_native, t.only_other, t.pts[0] / b, t.pts[1] / b,
+                    (double)t.normal_differs / b, t.depth_diff / b, t.depth_absdiff / b,
+                    t.nearest / (double)std::max(1L, t.nearest_n), t.impulse[0] / b, t.impulse[1] / b, t.lateral[0] / b,
+                    t.lateral[1] / b, t.fresh[0] / std::max(1.0, t.pts[0]), t.fresh[1] / std::max(1.0, t.pts[1]),
+                    t.life[0] / std::max(1.0, t.pts[0]), t.life[1] / std::max(1.0, t.pts[1]));
+    }
+    const ShadowWorst *worst[2] = {&sh.worst_depth, &sh.worst_normal};
+    const char *title[2] = {"largest deepest-point depth gap", "largest angle between the normals (both deeper than 1e-3)"};
+    for (int t = 0; t < 2; t++) {
+        const ShadowWorst &w = *worst[t];
+        if (w.step < 0) continue;
+        std::printf("  %s %.3g: step %d, bodies %d and %d: depth native %.6g (%d pts), %s %.6g (%d pts); "
+                    "normals (%.6f %.6f %.6f) / (%.6f %.6f %.6f)\n",
+                    title[t], w.score, w.step, w.lo, w.hi, w.depth[0], w.pts[0], backend.c_str(), w.depth[1], w.pts[1], (double)w.normal[0].x(),
+                    (double)w.normal[0].y(), (double)w.normal[0].z(), (double)w.normal[1].x(), (double)w.normal[1].y(),
+                    (double)w.normal[1].z());
+        for (int k = 0; k < 2; k++) {
+            const btVector3 &o = w.xf[k].getOrigin();
+            const btQuaternion q = w.xf[k].getRotation();
+            std::printf("    body %d: origin (%.17g, %.17g, %.17g) rotation xyzw (%.17g, %.17g, %.17g, %.17g)\n", k ? w.hi : w.lo,
+                        (double)o.x(), (double)o.y(), (double)o.z(), (double)q.x(), (double)q.y(), (double)q.z(), (double)q.w());
+        }
+    }
+}
+
 // ---- output ---------------------------------------------------------------------
 
 void print_header()
@@ -1028,6 +1306,10 @@ void usage(const char *argv0)
                  "               from the second on; every figure is the median over the trials, and\n"
                  "               a second table gives stability metrics as mean+-sd with a verdict vs native\n"
                  "  --per-trial  also print every trial's row (backend#trial; the table only)\n"
+                 "  --shadow     identical poses: before each step every other backend takes native's\n"
+                 "               body states; prints, per pair type, how its contacts differ from\n"
+                 "               native's (points, normals, depths, impulses, lifetimes) instead of the tables\n"
+                 "  --shadow-pair LO HI STEP  --shadow, and every point of bodies LO-HI's manifold at STEP\n"
                  "  --bp KIND    Minko broadphase structure: sap (default), auto, hgrid, brute\n"
                  "  --bp-margin M  how far Minko's filed boxes reach past Bullet's AABBs (default 0.05, Dbvt's)\n",
                  argv0);
@@ -1037,7 +1319,7 @@ void usage(const char *argv0)
 
 int main(int argc, char **argv)
 {
-    bool quick = false, list = false, no_native = false, per_trial = false;
+    bool quick = false, list = false, no_native = false, per_trial = false, shadow = false;
     const char *json = nullptr;
     int steps_override = 0, trials = 1;
     std::vector<std::string> only_scenes, only_backends;
@@ -1053,6 +1335,13 @@ int main(int argc, char **argv)
         else if (a == "--steps" && i + 1 < argc) steps_override = std::atoi(argv[++i]);
         else if (a == "--trials" && i + 1 < argc) trials = std::max(1, std::atoi(argv[++i]));
         else if (a == "--per-trial") per_trial = true;
+        else if (a == "--shadow") shadow = true;
+        else if (a == "--shadow-pair" && i + 3 < argc) {
+            shadow = true;
+            g_probe.lo = std::atoi(argv[++i]);
+            g_probe.hi = std::atoi(argv[++i]);
+            g_probe.step = std::atoi(argv[++i]);
+        }
         else if (a == "--bp" && i + 1 < argc) {
             std::string k = argv[++i];
             g_bp_kind = k == "sap" ? MK_BP_SAP : k == "hgrid" ? MK_BP_HGRID : k == "brute" ? MK_BP_BRUTE : MK_BP_AUTO;
@@ -1064,6 +1353,7 @@ int main(int argc, char **argv)
             return 2;
         }
     }
+    if (shadow) g_referee = false;  // the stability figures mean nothing there
     if (list) {
         for (const SceneEntry &e : kScenes) std::printf("scene   %s\n", e.id);
         for (const Backend &b : kBackends) std::printf("backend %s\n", b.name);
@@ -1100,17 +1390,38 @@ int main(int argc, char **argv)
                 continue;
             picked.push_back(b);
         }
+        if (shadow && (picked[0] != 0 || picked.size() < 2)) {
+            std::fprintf(stderr, "bullet_scenes: --shadow needs native and another backend\n");
+            return 2;
+        }
         if (picked.empty()) {
             std::fprintf(stderr, "bullet_scenes: no backend left for %s (--no-native with no other --backend)\n", e.id);
             continue;
         }
         // per_backend[k][t]: backend picked[k] in trial t.
         std::vector<std::vector<Result>> per_backend(picked.size());
+        std::vector<Shadow> shadows(picked.size());
         for (int t = 0; t < trials; t++) {
             std::vector<Run *> runs;
             for (int b : picked) runs.push_back(new Run(scene, kBackends[b], steps, t));
-            for (int step = 0; step < steps; step++)
+            for (int step = 0; step < steps; step++) {
+                std::vector<char> resting;
+                if (shadow) {
+                    for (size_t k = 1; k < runs.size(); k++) runs[k]->take_state_of(*runs[0]);
+                    for (const btRigidBody *b : runs[0]->bodies())
+                        resting.push_back(b->getInvMass() > 0 && below_sleep_thresholds(b));
+                }
                 for (size_t k = 0; k < runs.size(); k++) runs[(k + (size_t)step) % runs.size()]->step(step);
+                if (shadow)
+                    for (size_t k = 1; k < runs.size(); k++) {
+                        shadow_compare(*runs[0], *runs[k], step, 3 * step >= 2 * steps, resting, &shadows[k]);
+                        shadow_dump(*runs[0], *runs[k], step);
+                    }
+            }
+            if (shadow) {
+                for (Run *r : runs) delete r;
+                continue;
+            }
             for (size_t k = 0; k < runs.size(); k++) {
                 per_backend[k].push_back(runs[k]->finish());
                 delete runs[k];
@@ -1123,6 +1434,11 @@ int main(int argc, char **argv)
                     for (size_t i = 0; i < r.end_pos.size(); i++)
                         r.divergence = std::max(r.divergence, (double)(r.end_pos[i] - native.end_pos[i]).length());
                 }
+        }
+        if (shadow) {
+            for (size_t k = 1; k < picked.size(); k++)
+                print_shadow(scene, std::string(kBulletTag) + "." + kBackends[picked[k]].name, shadows[k]);
+            continue;
         }
         if (per_trial)
             for (size_t k = 0; k < picked.size(); k++)

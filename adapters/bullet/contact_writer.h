@@ -1,8 +1,14 @@
 // contact_writer.h (internal to libminko_bullet): writes one frame's full
 // contact manifold into Bullet's btPersistentManifold, matching points to the
-// cached ones by feature pair instead of by distance, so the solver's
+// cached ones by feature pair instead of by nearest distance, so the solver's
 // warm-start state (m_appliedImpulse, lateral impulses, m_prevRHS, lifetime)
-// follows the contact it belongs to.
+// follows the contact it belongs to. A feature match counts only within
+// Bullet's own matching radius (the breaking threshold, between the anchors
+// on the manifold's body 0, as getCacheEntry measures): a contact that slid
+// farther in one frame starts cold, as in Bullet. Measured on identical poses
+// (demos/bullet_scenes --scene 3000_boxes --shadow --backend minko_np): without
+// that radius 4-9 % of the points were fresh against native's 25-64 %, and
+// the manifolds carried 45-67 % more normal impulse than native's.
 //
 // Contract. The caller gives the points of one pair in Bullet's convention
 // (normal on B pointing from B to A, point on B, signed distance with negative

@@ -282,13 +282,14 @@ START_TEST(writer_matches_add_contact_point)
 }
 END_TEST
 
-// Warm starting follows features, not positions: four corners whose positions
-// rotate by one place between frames keep their own impulses. Bullet's
-// distance matching hands every impulse to the wrong corner here.
+// Warm starting follows features, not positions: four contacts 0.01 apart
+// (inside the rig's breaking threshold of 0.02) whose positions rotate by
+// one place between frames keep their own impulses. Bullet's distance
+// matching hands every impulse to the wrong contact here.
 START_TEST(writer_impulses_follow_features)
 {
-    const btScalar xs[4] = {btScalar(-0.5), btScalar(0.5), btScalar(0.5), btScalar(-0.5)};
-    const btScalar zs[4] = {btScalar(-0.5), btScalar(-0.5), btScalar(0.5), btScalar(0.5)};
+    const btScalar xs[4] = {btScalar(-0.005), btScalar(0.005), btScalar(0.005), btScalar(-0.005)};
+    const btScalar zs[4] = {btScalar(-0.005), btScalar(-0.005), btScalar(0.005), btScalar(0.005)};
     for (int swapped = 0; swapped < 2; swapped++) {
         WriterRig rig(swapped != 0);
         mkb::PairContact c[4];
@@ -319,10 +320,16 @@ START_TEST(writer_impulses_follow_features)
     r.setPersistentManifold(&rig.manifold);
     for (int i = 0; i < 4; i++) r.addContactPoint(btVector3(0, 1, 0), btVector3(xs[i], 1, zs[i]), btScalar(-0.01));
     for (int i = 0; i < 4; i++) rig.manifold.getContactPoint(i).m_appliedImpulse = btScalar(1 + i);
-    int moved = 0;
     for (int i = 0; i < 4; i++) r.addContactPoint(btVector3(0, 1, 0), btVector3(xs[(i + 1) % 4], 1, zs[(i + 1) % 4]), btScalar(-0.02));
-    for (int i = 0; i < 4; i++) moved += rig.manifold.getContactPoint(i).m_positionWorldOnB.x() != xs[i];
-    ck_assert_int_eq(moved, 0);  // each slot kept its place, so its impulse went to another corner's contact
+    // Contact i (now at place i + 1) should carry impulse 1 + i.
+    int wrong = 0;
+    for (int i = 0; i < 4; i++)
+        for (int s = 0; s < rig.manifold.getNumContacts(); s++) {
+            const btManifoldPoint &p = rig.manifold.getContactPoint(s);
+            if (p.m_positionWorldOnB.x() == xs[(i + 1) % 4] && p.m_positionWorldOnB.z() == zs[(i + 1) % 4])
+                wrong += p.m_appliedImpulse != btScalar(1 + i);
+        }
+    ck_assert_int_gt(wrong, 0);
 }
 END_TEST
 
@@ -469,6 +476,48 @@ START_TEST(writer_moved_feature_keeps_impulse)
     // 2 was not reported and still touches: it stays beside its far successor.
     MK_ASSERT_NEAR(rig.manifold.getContactPoint(rig.slot_of(2)).m_appliedImpulse, 2, 0);
     ck_assert_int_eq(rig.manifold.getNumContacts(), 3);
+}
+END_TEST
+
+// A contact that keeps its features but whose anchor on the manifold's body
+// 0 moved farther than the breaking threshold in one frame (a corner sliding
+// fast over a face) is a new contact, as for Bullet's getCacheEntry: it
+// starts cold instead of pushing with the impulse of another place. Within
+// the threshold it keeps its impulses; both as Bullet's own matching does.
+START_TEST(writer_far_moved_feature_starts_cold)
+{
+    const btScalar moves[2] = {btScalar(0.015), btScalar(0.05)};  // threshold 0.02
+    for (int swapped = 0; swapped < 2; swapped++) {
+        for (int k = 0; k < 2; k++) {
+            WriterRig mine(swapped != 0), ref(swapped != 0);
+            mkb::PairContact c = contact(btScalar(0.2), btScalar(0.3), btScalar(-0.01), 4, 5);
+            mine.write(&c, 1);
+            btManifoldResult r(ref.wa, ref.wb);
+            r.setPersistentManifold(&ref.manifold);
+            r.addContactPoint(c.normal_on_b, c.point_on_b, c.distance);
+            for (WriterRig *w : {&mine, &ref}) {
+                w->manifold.getContactPoint(0).m_appliedImpulse = 3;
+                w->manifold.getContactPoint(0).m_appliedImpulseLateral1 = btScalar(0.5);
+            }
+            c.point_on_b += btVector3(moves[k], 0, 0);
+            mine.write(&c, 1);
+            r.addContactPoint(c.normal_on_b, c.point_on_b, c.distance);
+            const bool warm = k == 0;
+            const int s = warm ? 0 : 1;  // appended after the old point
+            // The far one is new: the old point stays beside it until the
+            // refresh drops it (slid beyond the threshold), in both manifolds.
+            ck_assert_int_eq(mine.manifold.getNumContacts(), warm ? 1 : 2);
+            ck_assert_int_eq(ref.manifold.getNumContacts(), mine.manifold.getNumContacts());
+            const btManifoldPoint &p = mine.manifold.getContactPoint(s);
+            const btManifoldPoint &q = ref.manifold.getContactPoint(s);
+            ck_assert_int_eq(swapped ? p.m_partId1 : p.m_partId0, 4);
+            MK_ASSERT_NEAR(p.m_appliedImpulse, warm ? 3 : 0, 0);
+            MK_ASSERT_NEAR(p.m_appliedImpulseLateral1, warm ? 0.5 : 0, 0);
+            MK_ASSERT_NEAR(q.m_appliedImpulse, p.m_appliedImpulse, 0);
+            MK_ASSERT_NEAR(p.m_positionWorldOnB.x(), 0.2 + moves[k], 1e-6);
+            MK_ASSERT_NEAR(q.m_positionWorldOnB.x(), 0.2 + moves[k], 1e-6);
+        }
+    }
 }
 END_TEST
 
@@ -2002,6 +2051,66 @@ START_TEST(np_switch_at_run_time)
 }
 END_TEST
 
+// A polyhedral hull on a box meets it as in Bullet's own algorithm, which
+// runs GJK alone on such a pair: one point per frame (Minko's deepest),
+// through addContactPoint, so the manifold matches and keeps points by
+// Bullet's own rule; on a second frame at the same poses that point is
+// matched and keeps its impulse. Its depth is Bullet's own on the same poses.
+START_TEST(np_hull_on_box_one_point_like_bullet)
+{
+    mkb::CollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btConvexHullShape prism;
+    for (int i = 0; i < 8; i++) {
+        const double t = SIMD_PI / 4 * i;
+        for (int up = 0; up < 2; up++)
+            prism.addPoint(btVector3((btScalar)std::cos(t), up ? btScalar(0.25) : btScalar(-0.25), (btScalar)std::sin(t)), false);
+    }
+    prism.recalcLocalAabb();
+    prism.initializePolyhedralFeatures();
+    btBoxShape ground(btVector3(3, btScalar(0.5), 3));
+    btCollisionObject floor, hull;
+    floor.setCollisionShape(&ground);
+    hull.setCollisionShape(&prism);
+    hull.setCollisionFlags(hull.getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+    ContactAddedCallback saved = gContactAddedCallback;
+    gContactAddedCallback = record_written;
+    const btTransform xf(btQuaternion::getIdentity(), btVector3(0, btScalar(-0.5), 0));
+    // The rounded bottom (margin 0.04) 0.01 into the floor, tilted so that
+    // one corner is the deepest.
+    const btTransform xh(btQuaternion(btVector3(1, 0, 0), btScalar(0.01)), btVector3(0, btScalar(0.28), 0));
+    floor.setWorldTransform(xf);
+    hull.setWorldTransform(xh);
+    btCollisionObjectWrapper wf(nullptr, &ground, &floor, xf, -1, -1), wh(nullptr, &prism, &hull, xh, -1, -1);
+    const long before = config.stats.minko_algorithms.load();
+    btCollisionAlgorithm *algo = dispatcher.findAlgorithm(&wf, &wh, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+    ck_assert_int_eq(config.stats.minko_algorithms.load(), before + 1);
+    btDefaultCollisionConfiguration native;
+    std::vector<PointOut> bullet = collide_once(&native, &ground, xf, &prism, xh);
+    const PointOut *ref = deepest(bullet);
+    ck_assert(ref != nullptr);
+    for (int frame = 0; frame < 2; frame++) {
+        btManifoldResult result(&wf, &wh);
+        btDispatcherInfo info;
+        g_written.clear();
+        algo->processCollision(&wf, &wh, info, &result);
+        btManifoldArray manifolds;
+        algo->getAllContactManifolds(manifolds);
+        ck_assert_int_eq(manifolds.size(), 1);
+        btPersistentManifold *m = manifolds[0];
+        ck_assert_int_eq((int)g_written.size(), 1);
+        ck_assert_int_eq(m->getNumContacts(), 1);
+        btManifoldPoint &p = m->getContactPoint(0);
+        MK_ASSERT_NEAR(p.getDistance(), ref->distance, 1e-4);
+        if (frame == 0) p.m_appliedImpulse = 5;
+        else MK_ASSERT_NEAR(p.m_appliedImpulse, 5, 0);
+    }
+    gContactAddedCallback = saved;
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
+}
+END_TEST
+
 // ---- the pose cache -------------------------------------------------------------
 
 // The configuration's per-object pose cache serves, for every call, exactly
@@ -2409,6 +2518,7 @@ Suite *suite()
     tcase_add_test(w, writer_refresh_of_fresh_points);
     tcase_add_test(w, writer_moved_feature_keeps_impulse);
     tcase_add_test(w, writer_mesh_parts_left_to_bullet);
+    tcase_add_test(w, writer_far_moved_feature_starts_cold);
     suite_add_tcase(s, w);
     TCase *b = tcase_create("broadphase");
     tcase_set_timeout(b, 60);
@@ -2438,6 +2548,7 @@ Suite *suite()
     tcase_add_test(n, np_warm_pairs_take_the_best_face);
     tcase_add_test(n, np_hull_candidates_like_bullet);
     tcase_add_test(n, np_switch_at_run_time);
+    tcase_add_test(n, np_hull_on_box_one_point_like_bullet);
     suite_add_tcase(s, n);
     TCase *pc = tcase_create("pose_cache");
     tcase_add_test(pc, np_pose_cache_sees_one_ulp);
