@@ -1914,6 +1914,19 @@ START_TEST(np_warm_pairs_take_the_best_face)
 }
 END_TEST
 
+// An octagonal prism of circumradius 1 and height 0.5 (axis y), with
+// Bullet's polyhedral features, so Bullet's own algorithms clip it.
+static void octagonal_prism(btConvexHullShape &prism)
+{
+    for (int i = 0; i < 8; i++) {
+        const double t = SIMD_PI / 4 * i;
+        for (int up = 0; up < 2; up++)
+            prism.addPoint(btVector3((btScalar)std::cos(t), up ? btScalar(0.25) : btScalar(-0.25), (btScalar)std::sin(t)), false);
+    }
+    prism.recalcLocalAabb();
+    prism.initializePolyhedralFeatures();
+}
+
 // Two polyhedral hulls feed Bullet's manifold as Bullet's own hull-hull
 // algorithm does: every clipped candidate through addContactPoint (each
 // with its feature keys), the deepest last, and the manifold keeps four of
@@ -1927,13 +1940,7 @@ START_TEST(np_hull_candidates_like_bullet)
     mkb::CollisionConfiguration config;
     btCollisionDispatcher dispatcher(&config);
     btConvexHullShape prism;
-    for (int i = 0; i < 8; i++) {
-        const double t = SIMD_PI / 4 * i;
-        for (int up = 0; up < 2; up++)
-            prism.addPoint(btVector3((btScalar)std::cos(t), up ? btScalar(0.25) : btScalar(-0.25), (btScalar)std::sin(t)), false);
-    }
-    prism.recalcLocalAabb();
-    prism.initializePolyhedralFeatures();
+    octagonal_prism(prism);
     btCollisionObject lower, upper;
     lower.setCollisionShape(&prism);
     upper.setCollisionShape(&prism);
@@ -2061,13 +2068,7 @@ START_TEST(np_hull_on_box_one_point_like_bullet)
     mkb::CollisionConfiguration config;
     btCollisionDispatcher dispatcher(&config);
     btConvexHullShape prism;
-    for (int i = 0; i < 8; i++) {
-        const double t = SIMD_PI / 4 * i;
-        for (int up = 0; up < 2; up++)
-            prism.addPoint(btVector3((btScalar)std::cos(t), up ? btScalar(0.25) : btScalar(-0.25), (btScalar)std::sin(t)), false);
-    }
-    prism.recalcLocalAabb();
-    prism.initializePolyhedralFeatures();
+    octagonal_prism(prism);
     btBoxShape ground(btVector3(3, btScalar(0.5), 3));
     btCollisionObject floor, hull;
     floor.setCollisionShape(&ground);
