@@ -1031,6 +1031,17 @@ static void run_case(const scene *case_sc, FILE *json, FILE *pf)
  * time is the best of `reps` replays (each replay starts Minko cold), and the
  * spaces take turns going first.
  *
+ * Frame 0 is the stress heap as built (10 000 spheres overlapping in a
+ * 2 x 2 x 1 m box): 3.3 M pairs, and over a quarter of Minko's total over the
+ * 100 frames. It is also the adapter's first call in each replay (records,
+ * index, sweep scratch, a pair array grown to 4 M pairs), as it is a
+ * program's first dSpaceCollide. Keeping the adapter warm across replays
+ * instead (session 10, a /tmp build) left frame 0 within the noise: 78-94
+ * ms warm against 76-88 ms cold, Minko alone and with all spaces (load
+ * 6-7); its time is the pairs (10.7 M box tests, the pair loop and the
+ * callback), not the cold start. demos/ode_ratios.sh turns --per-frame's
+ * file into the medians, means and ratios issue 7 is judged on.
+ *
  * --frames A:B measures frames A..B-1 only: ODE's spaces keep nothing from
  * call to call and skip the frames before A; Minko's runs them untimed, so
  * its state is that of the whole replay.

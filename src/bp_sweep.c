@@ -28,9 +28,16 @@
  * most pairs kept. Into the pair array (no report, no statics) each tested
  * pair is written and kept by moving the end past it (test & 1). ODE's
  * stress heap replayed (ode_scenes --scene stress_space --backend minko,
- * frames 0-11, 3 runs, load 6-7): mean 20.4-21.6 -> 14.8-15.7 ms per
- * frame; frames 30-99 (sparse, ~2 600 pairs) median 0.80-0.98 ->
- * 0.80-0.86 ms, though callgrind counts 10 % more instructions there.
+ * session 10, alternated runs, load 6-8): frames 0-11 mean 20.4-24.0 ->
+ * 13.9-17.2 ms per frame (3 runs); frames 30-99 (sparse, ~2 600 pairs)
+ * median 0.81-0.98 -> 0.80-0.86 ms (5 runs), though callgrind counts 10 %
+ * more instructions there (frames 60-64: 22.96 -> 25.43 M).
+ * Not kept (session 10): the test as four SSE2 packed compares (lanes
+ * {x, y} and {y, z} of each end): 17 % fewer sweep instructions in the
+ * densest frames (821 -> 679 M over frames 0-2) and frames 0-11 about
+ * 10 % faster, but the sparse frames 30-99 no faster (median 0.84-0.96
+ * against 0.83-0.92 ms, 3 alternated runs, load 7), for a second,
+ * platform-specific form of the test.
  *
  * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
  * quantisation, rows; made with headroom) and start from the last sweep's

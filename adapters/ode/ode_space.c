@@ -36,6 +36,13 @@
  * and a pair table on top: 7.25 M instructions per frame against 4.49 M
  * for this sweep (callgrind, frames 60-64 of the replay).
  *
+ * Not kept (session 10): the pair loop with its two prefetch bounds
+ * folded into one test, the filter's flags ANDed and the first-seen order
+ * picked without a branch: 63 -> 53 instructions per pair (callgrind,
+ * replay frames 0-2, 5.3 M pairs) but 4-10 % slower on the replay's
+ * frames 0-11 and 30-99 (3 alternated runs, load 6-8): the loop waits on
+ * memory (records, geoms, the callback's stores), not on instructions.
+ *
  * Pair order: the sweep's, fixed by the calls made so far; within a pair,
  * the geom this space's records met first comes first (a first-seen index
  * per record), so neither addresses nor removals (which move records)
