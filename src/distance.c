@@ -246,6 +246,18 @@ MK_ALWAYS_INLINE int face_witness_on_b(const mk_pair *p, mk_real d, mk_vec3 n, m
     return 1;
 }
 
+/* B's face axis n, d along it, answered in A's frame: A's corner deepest
+ * along n, moved d along n, lands on B's face plane; 1 when it lies on the
+ * face (to tol), the usual case (a corner of A under B's face), with one
+ * rotation instead of face_witness_on_b's five. */
+MK_ALWAYS_INLINE int corner_under_b(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
+{
+    int f = -1;
+    *pa = mk_core_support_typed(p->a, MK_SHAPE_BOX, n, &f);
+    *pb = mk_v3_mad(*pa, d, n);
+    return in_box(p->b->u.half_extents, mk_mat3_tmul_v3(p->r, mk_v3_sub(*pb, p->t)), tol);
+}
+
 static int face_witnesses(const mk_pair *p, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
 {
     return face_witness_on_a(p, d, n, tol, pa, pb) || face_witness_on_b(p, d, n, tol, pa, pb);
@@ -413,6 +425,35 @@ static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d
     return corner_certified(p, side, corner, tol, d, pa, pb);
 }
 
+/* The best of the six face axes of two box cores (A's e_i, B's R_j, each
+ * turned to point from A towards B) in closed form: the face-axis half of
+ * SAT, which a separated pair often needs alone (box_box_sat). */
+static mk_real box_face_axes(const mk_pair *p, mk_vec3 *n, int *of_b)
+{
+    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, tb = mk_mat3_tmul_v3(p->r, p->t);
+    mk_mat3 ar = mk_mat3_abs(p->r);
+    /* B's extent along A's axes is |R| hb, A's along B's is |R|^T ha. */
+    mk_vec3 sa = mk_v3_sub(mk_v3_sub(mk_v3_abs(p->t), ha), mk_mat3_mul_v3(ar, hb));
+    mk_vec3 sb = mk_v3_sub(mk_v3_sub(mk_v3_abs(tb), hb), mk_mat3_tmul_v3(ar, ha));
+    mk_real best = sa.x, s;
+    int axis = 0;
+    if (sa.y > best) best = sa.y, axis = 1;
+    if (sa.z > best) best = sa.z, axis = 2;
+    if (sb.x > best) best = sb.x, axis = 3;
+    if (sb.y > best) best = sb.y, axis = 4;
+    if (sb.z > best) best = sb.z, axis = 5;
+    *of_b = axis >= 3;
+    switch (axis) {
+    case 0: *n = mk_v3(p->t.x >= 0 ? 1 : -1, 0, 0); break;
+    case 1: *n = mk_v3(0, p->t.y >= 0 ? 1 : -1, 0); break;
+    case 2: *n = mk_v3(0, 0, p->t.z >= 0 ? 1 : -1); break;
+    default:
+        s = (axis == 3 ? tb.x : axis == 4 ? tb.y : tb.z) >= 0 ? 1 : -1;
+        *n = mk_v3_scale(axis == 3 ? p->r.c0 : axis == 4 ? p->r.c1 : p->r.c2, s);
+    }
+    return best;
+}
+
 /* Box cores by SAT's 15 axes (face normals and edge cross products of the
  * original boxes, about a tenth of GJK + EPA). Its best axis gives a bound
  * that is exact for overlapping cores; for separated ones it is a lower bound
@@ -423,56 +464,61 @@ static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d
  * pairs (corner-face and edge-edge closest features), every crossing rod and
  * every overlapping pair of issue 2's families. Any axis with such witnesses
  * certifies the distance (no other axis can separate by more than two actual
- * surface points are apart), so the SAT (sat_box.h, inlined here with its
- * early stop at 0) stops when a face axis separates, and that axis is tried
- * first; the nine edge axes are skipped when it holds: corner-face pairs,
- * most separated pairs, pay about half as much. Separated pairs whose
- * closest features are a corner and an edge (or two corners) are certified
- * by the corner and its clamp (corner_witnesses). Overlapping pairs take
- * the witnesses of the SAT's own axis: B's deepest corner over A's face (or
- * A's over B's), or the two edges the edge axis names (edge_witnesses).
- * Otherwise (ties at rounding level) returns 0 and GJK, then EPA if the
- * cores overlap, answers.
+ * surface points are apart), so a pair whose best face axis already
+ * separates tries that axis first (box_face_axes) and skips the nine edge
+ * axes when it holds: corner-face pairs, most separated pairs, pay about half
+ * as much. Separated pairs whose closest features are a corner and an edge
+ * (or two corners) are certified by the corner and its clamp
+ * (corner_witnesses). Pairs whose faces overlap run the SAT inlined
+ * (sat_box.h; it stops at an edge axis that separates) and take the
+ * witnesses of its own axis: B's deepest corner over A's face, A's under
+ * B's (corner_under_b), or the two edges the edge axis names
+ * (edge_witnesses). Otherwise (ties at rounding level) returns 0 and GJK,
+ * then EPA if the cores overlap, answers.
  *
- * Session 10 (bench_narrow minko.pose, instructions per query under
- * callgrind, before -> after): one SAT pass instead of a face pass and a
- * second full SAT, the SAT inlined, edge witnesses from the named edges and
- * two store-forwarding stalls removed: penetrating box_box 1828 -> 1343,
- * thin_rods 1885 -> 1410, parallel_faces 1674 -> 1292; separated within
- * +-6 % (parallel_faces 841 -> 894, thin_rods 1894 -> 1417). The
- * branch-free SAT (every axis computed, the best kept by selects) is the
- * form both callers run: on these homogeneous families a branchy face pass
- * ran separated pairs 5-10 % faster, but mk_collide's random poses need the
- * selects, and one form is kept (see sat_box.h). */
+ * Session 10, bench_narrow minko.pose, instructions per query (callgrind)
+ * before -> after: penetrating box_box 1828 -> 1334, thin_rods 1885 ->
+ * 1449, parallel_faces 1674 -> 1311, deep 1828 -> 1337; separated box_box
+ * 1696 -> 1567, thin_rods 1894 -> 1456, parallel_faces 841 -> 793, deep
+ * 1439 -> 1352. Tried and not kept: one SAT pass for every pair (stop at
+ * a separating face group, no face pass first): penetrating pairs 30-40
+ * instructions fewer, but separated face pairs 5-19 % slower in time
+ * (parallel_faces 71 -> 82 ns with 2000 cases per family, load 8): the
+ * face pass's branches let a separated pair's witnesses start early. */
 static int box_box_sat(const mk_pair *p, answer *ans)
 {
     mk_sat_options o = mk_sat_defaults();
     mk_sat_result s;
     mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, n, pa, pb;
     mk_real tol = 64 * MK_REAL_EPSILON * (mk_v3_max_abs(ha) + mk_v3_max_abs(hb) + mk_v3_max_abs(p->t)), d;
-    int ok = 0, fa, fb;
-    /* One pass over the axes that stops at the first group (A's faces, B's,
-     * the edges) that separates: a separated pair mostly pays for faces only. */
-    o.stop_above = 0;
-    mk_sat_box_box_inl(ha, hb, &p->r, p->t, &o, &s);
-    d = s.best;
-    n = s.normal;
-    if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
-    if (s.kind != MK_SAT_EDGES && (s.kind == MK_SAT_FACE_B ? face_witness_on_b(p, d, n, tol, &pa, &pb) : face_witness_on_a(p, d, n, tol, &pa, &pb))) {
-        /* a corner under a face: d along n (apart, or the deepest corner) */
-    } else if (d > 0 && s.kind != MK_SAT_EDGES && (corner_walk(p, n, tol, &fa, &fb, &d, &pa, &pb) || edge_pairs_certified(p, fa, fb, tol, &d, &pa, &pb))) {
-        /* A corner and its clamp, or two edges at the last corners tried,
-         * certified along their own direction (no SAT bound needed):
+    int ok = 0, of_b, fa, fb;
+    d = box_face_axes(p, &n, &of_b);
+    if (d > 0) {
+        /* Apart along a face: B's corner under A's face, or A's under B's;
+         * else a corner and its clamp, or two edges at the last corners
+         * tried, certified along their own direction (no SAT bound needed:
          * vertex-edge, vertex-vertex and most edge-edge pairs skip the nine
-         * edge axes. */
-        n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
-    } else {
-        if (!s.complete && s.kind != MK_SAT_EDGES) { /* apart along a face: the rest of the axes */
-            o.stop_above = MK_REAL_MAX;
-            mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
-            d = s.best;
-            n = s.normal;
+         * edge axes); else every axis. */
+        ok = of_b ? face_witness_on_b(p, d, n, tol, &pa, &pb) : face_witness_on_a(p, d, n, tol, &pa, &pb);
+        if (!ok && (corner_walk(p, n, tol, &fa, &fb, &d, &pa, &pb) || edge_pairs_certified(p, fa, fb, tol, &d, &pa, &pb))) {
+            n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
+            ok = 1;
         }
+        if (!ok) mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
+    } else {
+        /* The faces overlap: the inlined SAT (an edge axis may still
+         * separate), and the witnesses of its own axis. */
+        o.stop_above = 0;
+        mk_sat_box_box_inl(ha, hb, &p->r, p->t, &o, &s);
+        if (s.kind == MK_SAT_FACE_B) ok = corner_under_b(p, s.best, s.normal, tol, &pa, &pb) || face_witness_on_b(p, s.best, s.normal, tol, &pa, &pb);
+        else if (s.kind == MK_SAT_FACE_A) ok = face_witness_on_a(p, s.best, s.normal, tol, &pa, &pb);
+        d = s.best;
+        n = s.normal;
+    }
+    if (!ok) {
+        d = s.best;
+        n = s.normal;
+        if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
         if (s.kind == MK_SAT_EDGES) ok = edge_witnesses(p, &s, d, n, tol, &pa, &pb);
         /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
         if (!ok && !face_witnesses(p, d, n, tol, &pa, &pb)) {

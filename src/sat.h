@@ -30,8 +30,9 @@
  * queries above for the few axes that survive. Measured (demos/bench_sat
  * --quick --family F under valgrind --tool=callgrind
  * --toggle-collect=mk_sat[_box_box], instructions per call, separated and
- * penetrating cases together): box-box 0.78k by mk_sat_box_box (0.83k in
- * session 6, 1.0k in session 3), 9.7k by mk_sat on box views; a box and a 32-point hull 30k; hulls of
+ * penetrating cases together): box-box 0.73k by mk_sat_box_box (0.81k at
+ * the start of session 10, 0.83k in session 6, 1.0k in session 3; see
+ * sat_box.h), 9.7k by mk_sat on box views; a box and a 32-point hull 30k; hulls of
  * 8/32/128 points 13.5k/42k/129k (session 3, before the pruning: 17k; 70k;
  * 28k/161k/718k). Minko's GJK + EPA answers hull pairs
  * faster (see the benchmark); SAT's value there is its feature output and

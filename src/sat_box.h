@@ -4,23 +4,37 @@
  * and indices as mk_sat on box views) as an inline function, so that each
  * caller gets it specialised for its options: mk_collide's box pair
  * (box_box.c: a margin and the hysteresis) and mk_distance's (distance.c:
- * stop at a separating face, no preference). One implementation; the
+ * pairs whose faces overlap, stop at a separating edge axis, no
+ * preference). One implementation; the
  * out-of-line mk_sat_box_box (box_box.c) is the same code for the tests
  * and demos/bench_sat. Complexity O(1): 6 face axes, then 9 edge axes
  * unless a face already separates by more than opt->stop_above.
  *
- * Which form runs, measured (session 10): all 15 axes in full with the
- * best kept by selects (no data-dependent branch until the face group's
- * early stop), because on random poses (bench_contacts) which axis wins is
- * data a branch predictor does not learn. The nine edge pairs share the
- * nine 2x2 minors of R that give B's extent along their axes (each minor
- * serves two pairs), 746 instead of 814 instructions per call on random
- * pairs. Tried and not kept: ranking the edge pairs by g |g| / |L|^2 (one
- * division, or a cross-multiplied comparison, instead of a square root
- * and a division per pair): more instructions (862, and the comparison
- * form compiled to branches on the double selects) and 4-5 % slower per
- * call; the square root and division are not the bottleneck at about
- * 3.3 instructions per cycle.
+ * Which form runs, measured in session 10 (load 6-10 on 2 cores; timings
+ * are ratios to ODE's dCollide in the same run, medians of 4-10 A/B runs
+ * under nice -15): one form for both callers, every axis computed and the
+ * best kept by selects (no data-dependent branch until the early stop
+ * after the six faces), because on random poses which axis wins is data a
+ * branch predictor does not learn. The nine edge pairs share the nine 2x2
+ * minors of R that give B's extent along their axes (each serves two
+ * pairs). Against session 9's form (faces stopping after A's three, each
+ * minor computed twice): demos/bench_contacts instructions per run
+ * (callgrind, --toggle-collect=mk_collide_pose / mk_collide, --loops 2)
+ * stacked -2.8 %, random -3.5 %, apart +1.6..3.8 % (B's faces are computed
+ * when A's already separate); time (pose and cold ÷ dCollide) within
+ * +-5 %, cold apart 10-13 % faster; Bullet's 1000_stack collision phase (demos/bullet_split.sh,
+ * 300 steps) 2713.8 -> 2677.9 M, mk_collide_pose 1495.5 -> 1459.6 M.
+ * Tried and not kept: (1) the same code with branches instead of selects
+ * (a constant flag per caller): demos/bench_narrow's box families 1-10 %
+ * faster with its 200 cases per family, which it repeats in the same order
+ * (a predictor learns part of it), but with --n 2000 separated rows 12-14 %
+ * slower; bench_contacts stacked and random 5-13 % slower. (2) Ranking the
+ * edge pairs by sep |sep| = g |g| / |L|^2 (one division instead of a square
+ * root and a division per pair, or a cross-multiplied comparison): more
+ * instructions (862 against 814 per call on random pairs, a scratch driver)
+ * and 4-5 % slower; the cross-multiplied form compiled its double selects
+ * to branches. The square roots and divisions are not the bottleneck at
+ * about 3.3 instructions per cycle.
  */
 #ifndef MINKO_SAT_BOX_H
 #define MINKO_SAT_BOX_H
