@@ -640,6 +640,16 @@ static int stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape *b, c
     return 0;
 }
 
+/* MK_MANIFOLD_TOUCHING_ONLY: the first `count` points of depth >= 0, in
+ * their order; returns how many. */
+static int touching(mk_manifold *m, int count)
+{
+    int i, n = 0;
+    for (i = 0; i < count; ++i)
+        if (m->points[i].depth >= 0) m->points[n++] = m->points[i];
+    return n;
+}
+
 /* Everything after the hint (out of line: the pair that stays apart
  * needs none of this frame). */
 static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
@@ -669,6 +679,14 @@ static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const
         return MK_OK;
     }
     if (cache) cache->axis = (int)sat.kind;
+    /* Sharp boxes apart, and the host wants no speculative point: nothing
+     * to clip (nor GJK's exact distance), the axis kind kept as above.
+     * (Rounded ones go on: the GJK fallback's warm state, its simplex and
+     * kept face, must advance as without the flag.) */
+    if (sat.best > 0 && ra + rb == 0 && cache && (cache->flags & MK_MANIFOLD_TOUCHING_ONLY)) {
+        none(out, xa->r.c2);
+        return MK_OK;
+    }
     n = sat.normal;
     nw = mk_mat3_mul_v3(xa->r, n);
     if (sat.kind != MK_SAT_EDGES) {
@@ -700,6 +718,7 @@ static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const
 #ifndef MK_WITHOUT_GJK
     if (sat.separation > 0 && !realised(out, count, ra + rb - sat.separation, &p)) return mk_collide_gjk_(a, xa, b, xb, margin, cache, out);
 #endif
+    if (cache && (cache->flags & MK_MANIFOLD_TOUCHING_ONLY)) count = touching(out, count);
     out->normal = nw;
     out->count = count;
     return MK_OK;
