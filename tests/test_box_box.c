@@ -6,18 +6,22 @@
  * closest points, and the move to world space written out. Cold calls and warm sequences in both
  * mk_manifold_modes, rounded boxes, margins: the same count, feature IDs
  * in the same order, normals, depths and all four points to rounding. */
+#include <float.h>
 #include <string.h>
 
 #include "manifold_internal.h"
 #include "polytope.h"
 #include "pose.h"
 #include "sat.h"
+#include "shape_internal.h" /* MK_MAX_SIZE */
 #include "support/mk_test.h"
 
 #if defined(MK_SINGLE)
 #  define TOL 2e-4
+#  define SMALLEST_NORMAL FLT_MIN
 #else
 #  define TOL 1e-10
+#  define SMALLEST_NORMAL DBL_MIN
 #endif
 
 #define REQUIRE(cond, ...) do { if (!(cond)) ck_abort_msg(__VA_ARGS__); } while (0)
@@ -273,12 +277,75 @@ START_TEST(box_box_matches_general_pieces)
 }
 END_TEST
 
+/* mk_collide_pose takes two boxes to box_box.c after one integer test of
+ * all their reals (manifold.c's boxes_ok); anything that test refuses
+ * goes to the general checks. So the test must accept exactly what the
+ * contract accepts: every size, rounding radius and the margin set to
+ * each boundary and non-finite value, the status against
+ * mk_shape_validate's and the margin rules, and every accepted query
+ * answered by the box path itself (bit for bit mk_box_box_collide's; the
+ * general path answers differently in the last bits). */
+START_TEST(box_checks_match_contract)
+{
+    const mk_real big = MK_MAX_SIZE, inf = (mk_real)INFINITY, nan = (mk_real)NAN;
+    const mk_real vals[] = {nan, -nan, inf, -inf, 0, -(mk_real)0, -1, SMALLEST_NORMAL / 4, SMALLEST_NORMAL, MK_REAL(0.5), big,
+                            big * (1 + 2 * MK_REAL_EPSILON), MK_REAL_MAX, -big};
+    const int nv = (int)(sizeof vals / sizeof vals[0]);
+    mk_shape good_a, good_b;
+    mk_pose pa, pb;
+    mk_rng r = {77};
+    int f, k, accepted = 0, refused = 0;
+    mk_shape_box(mk_v3(0.5, 0.4, 0.3), MK_REAL(0.02), &good_a);
+    mk_shape_box(mk_v3(0.3, 0.6, 0.2), 0, &good_b);
+    mk_pose_from_transform(mk_transform_make(mk_v3(0.1, 0.2, 0.3), mk_rng_quat(&r)), &pa);
+    mk_pose_from_transform(mk_transform_make(mk_v3(0.4, 0.1, 0.6), mk_rng_quat(&r)), &pb);
+    /* Field f: radius, then x, y, z of A (0-3) and of B (4-7); 8: the margin. */
+    for (f = 0; f < 9; ++f) {
+        for (k = 0; k < nv; ++k) {
+            mk_shape a = good_a, b = good_b;
+            mk_real margin = MK_REAL(0.01);
+            mk_manifold got, want;
+            mk_manifold_cache c1, c2;
+            mk_status st, expect;
+            if (f < 8) {
+                mk_shape *s = f < 4 ? &a : &b;
+                if (f % 4 == 0) s->radius = vals[k];
+                else if (f % 4 == 1) s->u.half_extents.x = vals[k];
+                else if (f % 4 == 2) s->u.half_extents.y = vals[k];
+                else s->u.half_extents.z = vals[k];
+            } else {
+                margin = vals[k];
+            }
+            if ((expect = mk_shape_validate(&a)) == MK_OK && (expect = mk_shape_validate(&b)) == MK_OK)
+                expect = !mk_real_is_valid(margin) ? MK_ERR_NOT_FINITE : margin < 0 ? MK_ERR_BAD_ARGUMENT : MK_OK;
+            memset(&c1, 0, sizeof c1);
+            memset(&c2, 0, sizeof c2);
+            memset(&got, 0x5a, sizeof got);
+            memset(&want, 0x5a, sizeof want);
+            st = mk_collide_pose(&a, &pa, &b, &pb, margin, &c1, &got);
+            ck_assert_msg(st == expect, "field %d value %d: %s, the contract %s", f, k, mk_status_name(st), mk_status_name(expect));
+            if (st != MK_OK) {
+                refused++;
+                continue;
+            }
+            accepted++;
+            MK_ASSERT_STATUS(mk_box_box_collide(&a, &pa, &b, &pb, margin, &c2, &want), MK_OK);
+            ck_assert_msg(memcmp(&got, &want, sizeof got) == 0 && memcmp(&c1, &c2, sizeof c1) == 0, "field %d value %d: not the box path", f,
+                          k);
+        }
+    }
+    ck_assert_int_gt(accepted, 20);
+    ck_assert_int_gt(refused, 50);
+}
+END_TEST
+
 static Suite *box_box_suite(void)
 {
     Suite *s = suite_create("box_box");
     TCase *tc = tcase_create("fused");
     tcase_set_timeout(tc, 60);
     tcase_add_test(tc, box_box_matches_general_pieces);
+    tcase_add_test(tc, box_checks_match_contract);
     suite_add_tcase(s, tc);
     return s;
 }
