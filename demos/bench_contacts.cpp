@@ -17,7 +17,11 @@
 //   random   boxes of half-extents 0.1 to 1, random orientations, overlapping
 //   apart    the same boxes separated (up to 0.5) with overlapping world AABBs:
 //            what a broadphase hands over that has no contact; accuracy is
-//            then only "no point reported" (a point is a failure)
+//            then only "no point reported" (a point is a failure). Each
+//            query reads its pair's shapes, poses and state from arrays as a
+//            world would, so it is memory-bound for every backend alike
+//            (callgrind --cache-sim, D1 read misses per call: minko.pose 5.7,
+//            ode.dCollide 9.0)
 // Per family and backend: ns per query (best of several timed loops over all
 // cases, same pose repeated as in a resting contact, after one untimed pass
 // that warms every per-pair state; the accuracy columns judge the answers of
