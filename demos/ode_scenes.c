@@ -13,11 +13,15 @@
  * backend of each case.
  *
  *   ode_scenes [--quick] [--json FILE] [--scene NAME] [--reps N] [--poses FILE] [--frames A:B] [--per-frame FILE]
- *              [--backend NAME] [--steps N] [--start F] [--compare]
+ *              [--backend NAME[,NAME...]] [--steps N] [--start F] [--compare]
  *
- * --backend and --steps run one backend for N steps (short runs under
- * callgrind: --toggle-collect=mk_ode_space_collide or dSpaceCollide then
- * splits a running simulation's space collide per function); --start F
+ * --backend NAME[,NAME...] runs only those backends and --steps N runs N
+ * steps (short runs under callgrind: --toggle-collect=mk_ode_space_collide
+ * or dSpaceCollide then splits a running simulation's space collide per
+ * function; `--backend ode.sap,ode.hash,minko.bp` is what the space
+ * collide ratio of the stress scene needs; with stress_space, --backend
+ * ode.hash|ode.sap|minko|floor replays those spaces only, e.g. one alone
+ * for a profile of it); --start F
  * (with --poses FILE, the stress scene only) starts the stress heap from
  * the recorded poses of frame F at rest, so that the settled heap's frames
  * run without the minutes its first frames take. --compare: see compare_pair.
@@ -274,6 +278,21 @@ typedef struct recording { int nbodies, frames; dReal *pose; } recording;
 
 /* --backend, --steps, --start (see the top of the file). */
 static const char *only_backend;
+
+/* --backend NAME[,NAME...]: whether `name` is one of them (all without --backend). */
+static int backend_chosen(const char *name)
+{
+    const char *p = only_backend;
+    size_t n = strlen(name);
+    if (!p) return 1;
+    for (;;) {
+        const char *end = strchr(p, ',');
+        size_t len = end ? (size_t)(end - p) : strlen(p);
+        if (len == n && !strncmp(p, name, n)) return 1;
+        if (!end) return 0;
+        p = end + 1;
+    }
+}
 static int steps_override;
 static int start_frame;
 static recording start_rec; /* frames of --poses, read for --start */
@@ -973,7 +992,7 @@ static void run_case(const scene *case_sc, FILE *json, FILE *pf)
     int b, n = 0, step;
     if (steps_override > 0) shortened.steps = steps_override;
     for (b = 0; b < NBACKENDS; b++) { /* time of impact only where something is fast */
-        if ((BACKENDS[b].toi && sc->wall_x <= 0) || (only_backend && strcmp(only_backend, BACKENDS[b].name))) continue;
+        if ((BACKENDS[b].toi && sc->wall_x <= 0) || !backend_chosen(BACKENDS[b].name)) continue;
         sim_init(&sims[n], &BACKENDS[b], sc);
         if (start_rec.pose && sc->build == build_stress) pose_bodies(&sims[n], &start_rec, start_frame);
         n++;
@@ -1179,6 +1198,13 @@ static void pose_bodies(const sim *s, const recording *r, int frame)
     }
 }
 
+/* --backend NAME[,NAME...]: the replay runs those spaces only (a profile
+ * of one space: no pair differences, no ratios). */
+static int space_runs(int b)
+{
+    return backend_chosen(SPACE_ONLY[b].be.name);
+}
+
 /* --per-frame FILE: one JSON line per measured frame and space (its best
  * time and its pair count), to see where the mean goes. */
 static void write_per_frame(FILE *pf, const scene *sc, double *const *best, long long *const *fpairs, int from, int to)
@@ -1186,7 +1212,8 @@ static void write_per_frame(FILE *pf, const scene *sc, double *const *best, long
     int f, b;
     for (f = from; f < to; f++)
         for (b = 0; b < NSPACE_ONLY; b++)
-            fprintf(pf,
+            if (space_runs(b))
+                fprintf(pf,
                     "{\"suite\":\"ode\",\"case\":\"stress_space_frame\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":1,"
                     "\"frame\":%d,\"space_ms\":%.6g,\"pairs\":%lld}\n",
                     sc->variant, SPACE_ONLY[b].be.name, f, best[b][f], fpairs[b][f]);
@@ -1223,6 +1250,7 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
             for (turn = 0; turn < NSPACE_ONLY; turn++) {
                 double t0, t;
                 b = (f + turn) % NSPACE_ONLY;
+                if (!space_runs(b)) continue;
                 if (f < from && b != SPACE_ONLY_MINKO) continue; /* ODE's spaces keep no state between calls */
                 pose_bodies(&sims[b], &rec, f);
                 sink.n = 0;
@@ -1240,13 +1268,18 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
                     ngot[b] = sink.n;
                 }
             }
-            if (rep == 0 && f >= from)
+            if (rep == 0 && f >= from && space_runs(SPACE_ONLY_MINKO))
                 for (b = 0; b < SPACE_ONLY_MINKO; b++)
-                    diff_pairs(got[b], ngot[b], got[SPACE_ONLY_MINKO], ngot[SPACE_ONLY_MINKO], &missing[b], &extra[b]);
+                    if (space_runs(b))
+                        diff_pairs(got[b], ngot[b], got[SPACE_ONLY_MINKO], ngot[SPACE_ONLY_MINKO], &missing[b], &extra[b]);
         }
     }
     if (pf) write_per_frame(pf, sc, best, fpairs, from, to); /* before median() sorts best[] */
     for (b = 0; b < NSPACE_ONLY; b++) {
+        if (!space_runs(b)) {
+            med[b] = mean[b] = HUGE_VAL;
+            continue;
+        }
         mean[b] = 0;
         worst[b] = -1;
         worst_at[b] = from;
@@ -1264,8 +1297,9 @@ static void run_space_only(const scene *sc, int reps, int from, int to, const ch
     printf("  %-10s %9s %9s %9s %5s %10s %14s %14s %10s\n", "backend", "median", "mean", "max", "at", "pairs", "not_in_minko",
            "only_minko", "vs_fastest");
     for (b = 0; b < NSPACE_ONLY; b++) {
-        double ratio = med[b] / fastest_ode;
+        double ratio = fastest_ode < HUGE_VAL ? med[b] / fastest_ode : 0; /* 0: no ODE space ran */
         const char *name = SPACE_ONLY[b].be.name;
+        if (!space_runs(b)) continue;
         if (b >= SPACE_ONLY_MINKO)
             printf("  %-10s %9.3f %9.3f %9.3f %5d %10.1f %14s %14s %10.2f\n", name, med[b], mean[b], worst[b], worst_at[b],
                    (double)npairs[b] / (to - from), "-", "-", ratio);
@@ -1543,7 +1577,7 @@ int main(int argc, char **argv)
                     "       [--reps N] [--poses FILE] [--frames A:B] [--per-frame FILE]   (stress_space: replays per\n"
                     "       frame; recorded frames, read or written; the frames A..B-1 measured; each frame's time and\n"
                     "       pairs per space, or each simulated step's times per backend, as JSON Lines)\n"
-                    "       [--backend NAME] [--steps N] [--start F]   (one backend; N steps per scene; the stress\n"
+                    "       [--backend NAME[,NAME...]] [--steps N] [--start F]   (those backends only; N steps per scene; the stress\n"
                     "       scene from frame F of --poses FILE, at rest)\n"
                     "       [--compare]   (Minko's contacts against dCollide's on the same poses, per class pair)\n",
                     argv[0]);

@@ -65,6 +65,7 @@
 #include "polytope.h"
 #include "pose.h"
 #include "sat.h"
+#include "sat_box.h"
 #include "shape_internal.h"
 
 #ifndef MK_WITHOUT_SAT
@@ -325,71 +326,7 @@ static int clip_reduced(const mk_pair *p, int ref_is_a, int face, mk_real slop, 
     return ref_is_a ? box_clip(p, 1, face, slop, margin, 1, o) : box_clip(p, 0, face, slop, margin, 1, o);
 }
 
-/* ---- SAT: the 15 axes in closed form (sat.h) -------------------------------- */
-
-/* The lower half-edge of each box edge ID, in polytope.h's box view. */
-static const unsigned char box_half_edge[12] = {11, 15, 9, 13, 2, 4, 0, 6, 3, 7, 1, 5};
-
-/* Box edge ID of the edge along `axis` at the corner whose other two
- * coordinates have the signs of s (minko/manifold.h numbering). */
-static int box_edge(int axis, const mk_real *s)
-{
-    int lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2;
-    return 4 * axis + (s[lo] > 0) + 2 * (s[hi] > 0);
-}
-
-/* Edge pair (e_i of A, R_j of B): axis L = e_i x R_j = (0, -R_i2j, R_i1j) in
- * the cyclic order (i, i1, i2), not counted when the edges are nearly
- * parallel. A's extent along L is |R_i2j| a_i1 + |R_i1j| a_i2; B's is
- * sum_k |(R^T L)_k| b_k, from the products rather than the cofactor identity
- * of a rotation, which the rounded R satisfies only to a few ulps (and the
- * division by a small |L| would magnify). All nine are computed in full and
- * the best kept by selects, without a branch on the data: on random poses
- * every test that skipped an axis early (a parallel pair, one that cannot
- * beat the faces) was a coin flip to the branch predictor, and its misses
- * cost more time than the nine square roots and divisions it saved (random
- * boxes in demos/bench_contacts: 350 -> 272 ns per call). */
-/* The best edge pair of two boxes so far: e_i of A, R_j of B (i = -1: none). */
-typedef struct box_edges { mk_real sep; int i, j; } box_edges;
-
-MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i,
-                                    int j, box_edges *best)
-{
-    int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3, ok, better;
-    mk_real l2 = r[i1][j] * r[i1][j] + r[i2][j] * r[i2][j], sep;
-    ok = l2 > MK_SAT_PARALLEL * MK_SAT_PARALLEL;
-    sep = mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]) -
-          mk_fabs_(r[i2][j1] * r[i1][j] - r[i1][j1] * r[i2][j]) * b[j1] - mk_fabs_(r[i2][j2] * r[i1][j] - r[i1][j2] * r[i2][j]) * b[j2];
-    sep /= mk_sqrt_(ok ? l2 : 1);
-    better = ok & (sep > best->sep);
-    best->i = mk_sel_int(better, i, best->i);
-    best->j = mk_sel_int(better, j, best->j);
-    best->sep = mk_max(best->sep, ok ? sep : -MK_REAL_MAX);
-}
-
-/* The kind, features, separation and normal of edge pair (e_i of A, R_j
- * of B) into *out: L = e_i x R_j pointing from A to B; A's supporting edge
- * sits at the corner with the signs of L, B's at the corner with those of
- * -R^T L. Reads rows (i + 1) % 3 and (i + 2) % 3 of r and the same entries
- * of d; row i and d[i] are multiplied by L_i = 0 only. */
-static void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, mk_real sep, mk_sat_result *out)
-{
-    static const unsigned char next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
-    int i1 = next[i], i2 = prev[i], lo = j == 0 ? 1 : 0, hi = j == 2 ? 1 : 2;
-    mk_real L[3], blo, bhi, l;
-    L[i] = 0, L[i1] = -r[i2][j], L[i2] = r[i1][j];
-    if (L[0] * d[0] + L[1] * d[1] + L[2] * d[2] < 0) L[0] = -L[0], L[1] = -L[1], L[2] = -L[2];
-    /* The two components of -R^T L that name B's edge (box_edge(j, .)). */
-    blo = -(r[0][lo] * L[0] + r[1][lo] * L[1] + r[2][lo] * L[2]);
-    bhi = -(r[0][hi] * L[0] + r[1][hi] * L[1] + r[2][hi] * L[2]);
-    l = mk_sqrt_(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
-    out->kind = MK_SAT_EDGES;
-    out->a = box_half_edge[box_edge(i, L)];
-    out->b = box_half_edge[4 * j + (blo > 0) + 2 * (bhi > 0)];
-    out->separation = sep;
-    out->normal = mk_v3(L[0] / l, L[1] / l, L[2] / l);
-}
-
+/* ---- SAT: the 15 axes in closed form (sat_box.h) ---------------------------- */
 
 /* Separation along edge pair (e_i of A, R_j of B) straight from the world
  * poses: the two rows of R and entries of t that box_edge_axis reads (row
@@ -397,9 +334,9 @@ static void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, mk_real
  * them; -MK_REAL_MAX when the edges are parallel. */
 static mk_real edge_sep_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat3 *ra, const mk_mat3 *rb, mk_vec3 dp, int i, int j)
 {
-    mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
+    mk_real r[3][3], ar[3][3], am[3][3], a[3], b[3], d[3];
     int n, k;
-    box_edges best;
+    mk_real l2, g;
     for (n = 1; n < 3; ++n) {
         int row = (i + n) % 3;
         mk_vec3 e = *column(ra, row);
@@ -409,101 +346,15 @@ static mk_real edge_sep_apart(const mk_vec3 *ha, const mk_vec3 *hb, const mk_mat
     }
     a[0] = ha->x, a[1] = ha->y, a[2] = ha->z;
     b[0] = hb->x, b[1] = hb->y, b[2] = hb->z;
-    best.sep = -MK_REAL_MAX;
-    best.i = best.j = -1;
-    box_edge_axis(r, ar, a, b, d, i, j, &best);
-    return best.sep;
-}
-
-/* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
- * frame), so every axis below is a few multiply-adds on scalars. Only the
- * index of the best axis of each kind is kept while testing; its normal is
- * built once at the end. The early stop looks at whole groups (A's faces,
- * B's faces, the edges): the answer is then the best of the groups tested. */
-/* A's face axis i and B's face axis j (B's offset along it into db[j]),
- * spelled out for constant indices like the edges. */
-MK_ALWAYS_INLINE void box_face_a(mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i, mk_real *best, int *at)
-{
-    mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
-    *at = mk_sel_int(sep > *best, i, *at);
-    *best = mk_max(*best, sep);
-}
-
-MK_ALWAYS_INLINE void box_face_b(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, mk_real *db, int j,
-                                 mk_real *best, int *at)
-{
-    mk_real sep;
-    db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
-    sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
-    *at = mk_sel_int(sep > *best, j, *at);
-    *best = mk_max(*best, sep);
-}
-
-MK_ALWAYS_INLINE void sat_boxes(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
-{
-    mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3], sa = -MK_REAL_MAX, sb = -MK_REAL_MAX, stop = opt->stop_above;
-    box_edges e;
-    int i, j, fa = 0, fb = -1, stopped;
-    mk_sat_kind kind;
-    r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
-    r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
-    r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
-    for (i = 0; i < 3; ++i)
-        for (j = 0; j < 3; ++j) ar[i][j] = mk_fabs_(r[i][j]);
-    a[0] = ha.x, a[1] = ha.y, a[2] = ha.z;
-    b[0] = hb.x, b[1] = hb.y, b[2] = hb.z;
-    d[0] = t.x, d[1] = t.y, d[2] = t.z;
-    e.sep = -MK_REAL_MAX;
-    e.i = e.j = -1;
-    /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
-    box_face_a(ar, a, b, d, 0, &sa, &fa);
-    box_face_a(ar, a, b, d, 1, &sa, &fa);
-    box_face_a(ar, a, b, d, 2, &sa, &fa);
-    stopped = sa > stop;
-    /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along +R_j. */
-    if (!stopped) {
-        box_face_b(r, ar, a, b, d, db, 0, &sb, &fb);
-        box_face_b(r, ar, a, b, d, db, 1, &sb, &fb);
-        box_face_b(r, ar, a, b, d, db, 2, &sb, &fb);
-        stopped = sb > stop;
-    }
-    /* Edge pairs: only the winner's normal and features are worked out. */
-    if (!stopped) {
-        /* Spelled out: with constant indices the axes' terms stay in registers. */
-        box_edge_axis(r, ar, a, b, d, 0, 0, &e);
-        box_edge_axis(r, ar, a, b, d, 0, 1, &e);
-        box_edge_axis(r, ar, a, b, d, 0, 2, &e);
-        box_edge_axis(r, ar, a, b, d, 1, 0, &e);
-        box_edge_axis(r, ar, a, b, d, 1, 1, &e);
-        box_edge_axis(r, ar, a, b, d, 1, 2, &e);
-        box_edge_axis(r, ar, a, b, d, 2, 0, &e);
-        box_edge_axis(r, ar, a, b, d, 2, 1, &e);
-        box_edge_axis(r, ar, a, b, d, 2, 2, &e);
-        stopped = e.sep > stop;
-    }
-    /* The normal and feature indices of the chosen axis only. */
-    kind = mk_sat_choose(sa, sb, e.sep, e.i >= 0, stopped, opt, out);
-    out->kind = kind;
-    if (kind == MK_SAT_FACE_A) {
-        mk_real si = d[fa] >= 0 ? 1 : -1;
-        out->a = 2 * fa + (d[fa] >= 0);
-        out->b = -1;
-        out->separation = sa;
-        out->normal = mk_v3(fa == 0 ? si : 0, fa == 1 ? si : 0, fa == 2 ? si : 0);
-    } else if (kind == MK_SAT_FACE_B) {
-        mk_real sj = db[fb] >= 0 ? 1 : -1;
-        out->a = -1;
-        out->b = 2 * fb + (db[fb] < 0);
-        out->separation = sb;
-        out->normal = mk_v3(sj * r[0][fb], sj * r[1][fb], sj * r[2][fb]);
-    } else {
-        edge_result(r, d, e.i, e.j, e.sep, out);
-    }
+    am[i][j] = edge_minor(r, i, j);
+    am[i][(j + 2) % 3] = edge_minor(r, i, (j + 2) % 3);
+    g = edge_gap(r, ar, am, a, b, d, i, j, &l2);
+    return edge_counted(l2) ? g / mk_sqrt_(l2) : -MK_REAL_MAX;
 }
 
 void mk_sat_box_box(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
 {
-    sat_boxes(ha, hb, R, t, opt, out);
+    mk_sat_box_box_inl(ha, hb, R, t, opt, out);
 }
 
 /* Midpoint of box edge `id` (minko/manifold.h numbering): 0 along its
@@ -666,6 +517,16 @@ static int edges_stay_apart(const mk_shape *a, const mk_pose *xa, const mk_shape
     return 0;
 }
 
+/* MK_MANIFOLD_TOUCHING_ONLY: the first `count` points of depth >= 0, in
+ * their order; returns how many. */
+static int touching(mk_manifold *m, int count)
+{
+    int i, n = 0;
+    for (i = 0; i < count; ++i)
+        if (m->points[i].depth >= 0) m->points[n++] = m->points[i];
+    return n;
+}
+
 /* Everything after the hint (out of line: the pair that stays apart
  * needs none of this frame). */
 static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const mk_shape *b, const mk_pose *xb, mk_real margin, mk_manifold_cache *cache,
@@ -683,7 +544,7 @@ static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const
     opt.prefer_rel = MK_MF_PREFER_REL;
     opt.prefer_abs = opt.prefer == MK_SAT_NONE ? 0 : MK_MF_PREFER_ABS * mk_min(mk_v3_min_comp(ha), mk_v3_min_comp(hb));
     opt.hold_face = !cache || cache->mode == MK_MANIFOLD_STABLE_IDS;
-    sat_boxes(ha, hb, &p.r, p.t, &opt, &sat);
+    mk_sat_box_box_inl(ha, hb, &p.r, p.t, &opt, &sat);
     if (sat.kind == MK_SAT_EDGES) face_axis(&p, &sat);
     if (sat.best - ra - rb > margin) {
         if (cache) {
@@ -695,6 +556,14 @@ static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const
         return MK_OK;
     }
     if (cache) cache->axis = (int)sat.kind;
+    /* Sharp boxes apart, and the host wants no speculative point: nothing
+     * to clip (nor GJK's exact distance), the axis kind kept as above.
+     * (Rounded ones go on: the GJK fallback's warm state, its simplex and
+     * kept face, must advance as without the flag.) */
+    if (sat.best > 0 && ra + rb == 0 && cache && (cache->flags & MK_MANIFOLD_TOUCHING_ONLY)) {
+        none(out, xa->r.c2);
+        return MK_OK;
+    }
     n = sat.normal;
     nw = mk_mat3_mul_v3(xa->r, n);
     if (sat.kind != MK_SAT_EDGES) {
@@ -726,6 +595,7 @@ static MK_NOINLINE mk_status collide(const mk_shape *a, const mk_pose *xa, const
 #ifndef MK_WITHOUT_GJK
     if (sat.separation > 0 && !realised(out, count, ra + rb - sat.separation, &p)) return mk_collide_gjk_(a, xa, b, xb, margin, cache, out);
 #endif
+    if (cache && (cache->flags & MK_MANIFOLD_TOUCHING_ONLY)) count = touching(out, count);
     out->normal = nw;
     out->count = count;
     return MK_OK;

@@ -23,6 +23,15 @@
  * have met; the exact closed test on the AABBs decides. Boxes infinite on the row axis (ground planes)
  * do not fit a row: they are tested against every box, O(n) each.
  *
+ * Without a branch on the test: in a dense heap about a third of the
+ * tested pairs overlap, at random, and a branch per axis mispredicted on
+ * most pairs kept. Into the pair array (no report, no statics) each tested
+ * pair is written and kept by moving the end past it (test & 1). ODE's
+ * stress heap replayed (ode_scenes --scene stress_space --backend minko,
+ * frames 0-11, 3 runs, load 6-7): mean 20.4-21.6 -> 14.8-15.7 ms per
+ * frame; frames 30-99 (sparse, ~2 600 pairs) median 0.80-0.98 ->
+ * 0.80-0.86 ms, though callgrind counts 10 % more instructions there.
+ *
  * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
  * quantisation, rows; made with headroom) and start from the last sweep's
  * order, so a coherent scene needs an insertion sort, O(n), instead of the
@@ -336,10 +345,52 @@ static rows_ rows_of(const struct mk_sweep *w)
     return r;
 }
 
-static inline mk_status test(sweep_ctx_ *c, rows_ r, int i, int j)
+/* mk_bp_overlap_ without a branch (see the header): 10.7 M tests for
+ * 3.3 M pairs in the densest frame of ODE's stress heap. */
+static inline int overlaps(const mk_aabb *a, const mk_aabb *b)
 {
-    if (!mk_bp_overlap_(&r.box[i], &r.box[j])) return MK_OK;
-    return emit(c, r.slot[i], r.slot[j]);
+    return (a->lo.x <= b->hi.x) & (b->lo.x <= a->hi.x) & (a->lo.y <= b->hi.y) & (b->lo.y <= a->hi.y) &
+           (a->lo.z <= b->hi.z) & (b->lo.z <= a->hi.z);
+}
+
+/* Sorted box x against the sorted boxes from j on while their rlo is at
+ * most hi (x's end on the sweep axis, moved to the row scanned), the pair
+ * passed as (x, j) or, with !x_first, (j, x). Into w->out (no report, no
+ * statics) each tested pair is written whatever the test says and kept by
+ * moving the end past it: no branch on the test. */
+static MK_INLINE mk_status scan(sweep_ctx_ *c, const rows_ r, int x, int j, uint32_t hi, int x_first)
+{
+    mk_aabb a;
+    uint32_t sa;
+    mk_bp_pair *at, *end;
+    mk_status st;
+    if (r.rlo[j] > hi) return MK_OK; /* most scans of a sparse scene: set nothing up */
+    a = r.box[x];
+    sa = r.slot[x];
+    if (c->report || c->statics) {
+        for (; r.rlo[j] <= hi; ++j)
+            if (mk_bp_overlap_(&a, &r.box[j]) &&
+                (st = x_first ? emit(c, sa, r.slot[j]) : emit(c, r.slot[j], sa)) != MK_OK)
+                return st;
+        return MK_OK;
+    }
+    at = c->at;
+    end = c->end;
+    for (; r.rlo[j] <= hi; ++j) {
+        const uint32_t sb = r.slot[j];
+        if (at == end) { /* full: grown only for a pair that overlaps */
+            if (!overlaps(&a, &r.box[j])) continue;
+            c->at = at;
+            if ((st = grow_out(c)) != MK_OK) return st;
+            at = c->at;
+            end = c->end;
+        }
+        at->a = sa < sb ? sa : sb;
+        at->b = sa < sb ? sb : sa;
+        at += overlaps(&a, &r.box[j]);
+    }
+    c->at = at;
+    return MK_OK;
 }
 
 /* Pairs inside one row [s, e): rhi[i] is below the next row's rlo values
@@ -347,13 +398,10 @@ static inline mk_status test(sweep_ctx_ *c, rows_ r, int i, int j)
 static mk_status sweep_row(sweep_ctx_ *c, int s, int e)
 {
     const rows_ r = rows_of(c->w);
-    int i, j;
+    int i;
     mk_status st;
-    for (i = s; i < e; ++i) {
-        uint32_t hi = r.rhi[i];
-        for (j = i + 1; r.rlo[j] <= hi; ++j)
-            if ((st = test(c, r, i, j)) != MK_OK) return st;
-    }
+    for (i = s; i < e; ++i)
+        if ((st = scan(c, r, i, i + 1, r.rhi[i], 1)) != MK_OK) return st;
     return MK_OK;
 }
 
@@ -367,18 +415,13 @@ static mk_status sweep_rows(sweep_ctx_ *c, int s, int e, int t, int u)
     const rows_ r = rows_of(c->w);
     uint32_t ls = r.rlo[s] + MK_SWEEP_ROW_, lt = r.rlo[t];
     mk_status st;
-    int j;
     for (;;) {
         if (ls <= lt) {
-            uint32_t hi = r.rhi[s] + MK_SWEEP_ROW_;
-            for (j = t; r.rlo[j] <= hi; ++j)
-                if ((st = test(c, r, s, j)) != MK_OK) return st;
+            if ((st = scan(c, r, s, t, r.rhi[s] + MK_SWEEP_ROW_, 1)) != MK_OK) return st;
             if (++s == e) return MK_OK;
             ls = r.rlo[s] + MK_SWEEP_ROW_;
         } else {
-            uint32_t hi = r.rhi[t] - MK_SWEEP_ROW_;
-            for (j = s; r.rlo[j] <= hi; ++j)
-                if ((st = test(c, r, j, t)) != MK_OK) return st;
+            if ((st = scan(c, r, t, s, r.rhi[t] - MK_SWEEP_ROW_, 0)) != MK_OK) return st;
             if (++t == u) return MK_OK;
             lt = r.rlo[t];
         }

@@ -35,7 +35,11 @@
  * for visibility, the rim by edge matching; +1 % instructions, slower on 32
  * and 128 points); SAT as the certificate, even given the exact depth as its
  * pruning floor (49k instructions against 53k unseeded on hull_32; the whole
- * GJK + EPA query is 22.5k).
+ * GJK + EPA query is 22.5k). Session 10, not kept: the exact depth by SAT
+ * instead of EPA on small hulls and on box-hull pairs: 2.7-3.6 times slower
+ * (sat.h). Nor the nearest-face search as four lanes over a row of face
+ * distances (hull_support.h's scan): instructions -0.3 %, time within noise
+ * (-3 % to +11 % per row, three alternations at load 9-10).
  */
 #ifndef MINKO_EPA_H
 #define MINKO_EPA_H

@@ -437,6 +437,15 @@ static void finish(const mk_mf *m, const mk_mat3 *ra, mk_vec3 pa, const mk_pair 
     }
 }
 
+/* MK_MANIFOLD_TOUCHING_ONLY: the points of depth >= 0, in their order. */
+static void drop_speculative(mk_mf *m)
+{
+    int i, n = 0;
+    for (i = 0; i < m->count; ++i)
+        if (m->p[i].depth >= 0) m->p[n++] = m->p[i];
+    m->count = n;
+}
+
 /* mk_collide_pose after its checks: the pair routine (the table's, or
  * `fn` when given), the reduction (unless out->reduce is 0) and the move to
  * world space. Out of line, so the checks and the two boxes' path run
@@ -476,6 +485,7 @@ static MK_NOINLINE mk_status collide_checked(const mk_shape *a, const mk_pose *x
     m.normal = mk_v3(0, 0, 1);
     if ((st = fn(&p, &m, cache)) != MK_OK) return st;
     if (out->reduce) mk_mf_reduce(&m);
+    if (cache && (cache->flags & MK_MANIFOLD_TOUCHING_ONLY)) drop_speculative(&m);
     if (m.count > out->capacity) {
         *out->count = m.count; /* how many the caller needs room for */
         return MK_ERR_CAPACITY;
@@ -497,6 +507,7 @@ static MK_INLINE mk_status collide_args(const mk_shape *a, const mk_pose *xa, co
     if (!mk_real_is_valid(margin)) return MK_ERR_NOT_FINITE;
     if (margin < 0) return MK_ERR_BAD_ARGUMENT;
     if (cache && cache->mode != MK_MANIFOLD_STABLE_IDS && cache->mode != MK_MANIFOLD_BEST_FACE) return MK_ERR_BAD_ARGUMENT;
+    if (cache && (cache->flags & ~MK_MANIFOLD_TOUCHING_ONLY)) return MK_ERR_BAD_ARGUMENT;
     return MK_OK;
 }
 
@@ -536,7 +547,8 @@ MK_ALWAYS_INLINE int boxes_ok(const mk_shape *a, const mk_pose *xa, const mk_sha
                               bits_max(bits_of(b->u.half_extents.y) - 1, bits_of(b->u.half_extents.z) - 1));
     real_bits round = bits_max(bits_of(a->radius + 0), bits_of(b->radius + 0));
     return (size < bits_of(MK_MAX_SIZE)) & (round <= bits_of(MK_MAX_SIZE)) & (bits_of(margin + 0) <= bits_of(MK_REAL_MAX)) &
-           mk_pose_ok_(xa) & mk_pose_ok_(xb) & (!cache || (unsigned)cache->mode <= (unsigned)MK_MANIFOLD_BEST_FACE);
+           mk_pose_ok_(xa) & mk_pose_ok_(xb) &
+           (!cache || ((unsigned)cache->mode <= (unsigned)MK_MANIFOLD_BEST_FACE && !(cache->flags & ~MK_MANIFOLD_TOUCHING_ONLY)));
 }
 
 /* The general path (the table's pair routine, or fn) into a reduced manifold. */

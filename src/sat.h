@@ -18,10 +18,11 @@
  * margin for contact generation, MK_REAL_MAX to test every axis); prefer is
  * the face/edge hysteresis hook, see mk_sat_options. No allocation, no
  * global state. Complexity: O(F_A S_B + F_B S_A) for the faces, S the cost
- * of a support query (a scan below MK_HULL_SCAN_MAX vertices, a hill climb
- * above), plus, for the edges, a walk over A's Gauss map along each edge arc
- * of B that visits only the few vertices of A whose regions the arc crosses
- * and tests their edges with the Gauss-map (Minkowski face) test of
+ * of a support query (a scan up to MK_HULL_COLD_SCAN_MAX vertices without
+ * a hint, MK_HULL_SCAN_MAX with one, a hill climb above), plus, for the
+ * edges, a walk over A's Gauss map along each edge arc of B that visits
+ * only the few vertices of A whose regions the arc crosses and tests their
+ * edges with the Gauss-map (Minkowski face) test of
  * Gregorius (GDC 2013); an arc whose signs are too close to call (parallel
  * faces) is instead tested against all of A's edges, O(E_A). Faces of
  * either and edges of B whose separation is provably below the best so far
@@ -30,12 +31,32 @@
  * queries above for the few axes that survive. Measured (demos/bench_sat
  * --quick --family F under valgrind --tool=callgrind
  * --toggle-collect=mk_sat[_box_box], instructions per call, separated and
- * penetrating cases together): box-box 0.78k by mk_sat_box_box (0.83k in
- * session 6, 1.0k in session 3), 9.7k by mk_sat on box views; a box and a 32-point hull 30k; hulls of
+ * penetrating cases together): box-box 0.73k by mk_sat_box_box (0.81k at
+ * the start of session 10, 0.83k in session 6, 1.0k in session 3; see
+ * sat_box.h), 9.7k by mk_sat on box views; a box and a 32-point hull 30k; hulls of
  * 8/32/128 points 13.5k/42k/129k (session 3, before the pruning: 17k; 70k;
  * 28k/161k/718k). Minko's GJK + EPA answers hull pairs
  * faster (see the benchmark); SAT's value there is its feature output and
  * hysteresis.
+ *
+ * Not kept (session 10): the depth of overlapping cores by SAT instead of
+ * EPA, every axis with no pruning, witnesses from the answer's feature pair
+ * (EPA where that pair is not unique). Measured on demos/bench_narrow's
+ * penetrating rows (minko.pose; callgrind instructions per mk_distance_pose,
+ * GJK included): (1) for hulls of <= 32 vertices, every face against the
+ * other's vertex rows and every edge pair through the Gauss-map test four
+ * at a time: hull_hull_8 12.3k -> 49.9k instructions, 1082 -> 3941 ns (one
+ * run each, same window, load 6; 324 edge pairs at ~60 scalar instructions
+ * each: -O2 packs only the products);
+ * (2) a box against a hull in the box's frame, where the box's Gauss map
+ * lies on the three coordinate great circles, so a hull edge's arc meets at
+ * most one box edge per axis, found from the crossing point in O(1)
+ * (O(V + F + E) in all): hull_box 17.6k -> 22.2k instructions, 1726 ->
+ * 4611 ns (same-run medians, load 8). The 90 edges x 3 axes of sign tests,
+ * 60 hull faces and ~37 crossings of a 32-point hull cost 18k instructions
+ * against EPA's 13.6k, at a lower rate per cycle. Either would need the
+ * sign tests packed over rows of face normals to pay. The box-hull code is on
+ * branch hull-sat-depth-experiment (not merged).
  */
 #ifndef MINKO_SAT_H
 #define MINKO_SAT_H

@@ -425,6 +425,40 @@ static int brute_count(const mk_aabb *b, int n)
     return c;
 }
 
+/* The sweep writes every tested pair into its array and keeps only those
+ * that overlap: a full array must still take as many pairs as the caller
+ * allowed, and grow only for a pair that overlaps. Dense random boxes
+ * (about a third of the tested pairs overlap, so tests that fail follow
+ * the last pair) with pair_capacity exactly their pair count pass; one
+ * less is MK_ERR_CAPACITY. */
+START_TEST(boxes_exact_capacity)
+{
+    static mk_aabb box[300];
+    mk_bp_def d = mk_bp_default_def();
+    mk_rng r = {21};
+    const mk_bp_pair *p;
+    mk_bp *bp;
+    int i, np, want, k;
+    for (k = 0; k < 4; ++k) {
+        for (i = 0; i < 300; ++i) box[i] = random_box(&r, 6, 0.5, 2.0);
+        want = brute_count(box, 300);
+        ck_assert_int_gt(want, 1024); /* past the first array: it grew to the bound */
+        d.proxy_capacity = 300;
+        d.fixed_capacity = 1;
+        d.pair_capacity = want;
+        MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &bp), MK_OK);
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 300, &p, &np), MK_OK);
+        ck_assert_int_eq(np, want);
+        mk_bp_destroy(bp);
+        d.pair_capacity = want - 1;
+        MK_ASSERT_STATUS(mk_bp_create(&d, NULL, &bp), MK_OK);
+        MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 300, &p, &np), MK_ERR_CAPACITY);
+        ck_assert(p == NULL && np == 0);
+        mk_bp_destroy(bp);
+    }
+}
+END_TEST
+
 /* Each box is checked as the sweep reads it, so a bad one is refused on
  * every path: calls that keep the plan and start from the last call's
  * order, new boxes past the last call's count, a NaN on the row axis (a
@@ -479,6 +513,7 @@ int main(void)
     tcase_add_test(tc, far_rows);
     tcase_add_test(tc, boxes_stride_and_order);
     tcase_add_test(tc, boxes_errors);
+    tcase_add_test(tc, boxes_exact_capacity);
     tcase_add_test(tc, boxes_bad_on_kept_plan);
     suite_add_tcase(su, tc);
     return mk_test_run(su);

@@ -337,8 +337,22 @@ static double box_box_oracle(const obox *a, const obox *b)
     return best;
 }
 
+/* Signed distance of p from the surface of box b: > 0 outside (the
+ * distance), < 0 inside (minus the distance to the nearest face). */
+static double box_surface_gap(const obox *b, mk_vec3 p)
+{
+    double inside = -HUGE_VAL;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        double o = fabs((double)mk_v3_dot(mk_v3_sub(p, b->c), b->ax[i])) - (double)hv(b->h, i);
+        if (o > inside) inside = o;
+    }
+    return inside > 0 ? point_box(b, p) : inside;
+}
+
 /* Random box pairs at a given scale and offset, separated and penetrating;
- * every answer against the oracle, both argument orders, overlap agreeing. */
+ * every answer against the oracle, both argument orders, overlap agreeing,
+ * and the witness points on the two surfaces. */
 static void box_family(uint64_t seed, mk_vec3 ha_shape, mk_vec3 hb_shape, double size, double offset, double rel_tol)
 {
     mk_rng rng = {seed};
@@ -360,6 +374,10 @@ static void box_family(uint64_t seed, mk_vec3 ha_shape, mk_vec3 hb_shape, double
         ck_assert_msg(fabs((double)r.distance - want) <= tol, "seed %llu case %d: got %.17g want %.17g (method %s)",
                       (unsigned long long)seed, i, (double)r.distance, want, mk_method_name(r.method));
         check_invariants(&r, extent + offset);
+        ck_assert_msg(fabs(box_surface_gap(&oa, r.point_a)) <= tol + 64 * MK_REAL_EPSILON * offset &&
+                          fabs(box_surface_gap(&ob, r.point_b)) <= tol + 64 * MK_REAL_EPSILON * offset,
+                      "seed %llu case %d: witnesses off the surfaces by %.3g, %.3g (method %s)", (unsigned long long)seed, i,
+                      box_surface_gap(&oa, r.point_a), box_surface_gap(&ob, r.point_b), mk_method_name(r.method));
         s = dist_ok(&b, xb, &a, xa);
         MK_ASSERT_NEAR(s.distance, r.distance, tol);
         MK_ASSERT_V3_NEAR(s.normal, mk_v3_neg(r.normal), NORMAL_TOL);

@@ -40,8 +40,16 @@
  * the tilt changes sign, and every feature ID with it. Hosts whose solver
  * is sensitive to the normal's tilt and can match contacts by position too
  * (Bullet's persistent manifold) should pick it. A cold call (no cache, or a new
- * contact) is exact in both modes. Bad input (NULL, NaN/Inf, non-unit rotations,
- * invalid shapes, a negative margin, an unknown cache mode) returns a status and leaves *out
+ * contact) is exact in both modes. The cache's `flags`, also the host's:
+ * MK_MANIFOLD_TOUCHING_ONLY drops the speculative points: the manifold is
+ * the one without the flag less its points of depth < 0 (and two sharp
+ * boxes that SAT finds apart report none, even a point at depth 0 by
+ * round-off), while the margin still decides how far apart a pair keeps
+ * its warm state (the preferred axis kind) instead of restarting cold. For
+ * hosts that use touching points only (Bullet's box-box pairs), two sharp
+ * boxes apart by less than the margin then skip the clip and GJK.
+ * Bad input (NULL, NaN/Inf, non-unit rotations, invalid shapes, a negative
+ * margin, an unknown cache mode or flag) returns a status and leaves *out
  * untouched; plane-plane pairs are MK_ERR_UNSUPPORTED. Nothing allocates;
  * every query runs in A's local frame. Methods: closed forms for sphere,
  * capsule and box-capsule pairs and for anything against a plane; SAT
@@ -132,10 +140,13 @@ typedef enum mk_manifold_mode {
     MK_MANIFOLD_BEST_FACE = 1   /* the minimum-penetration face every frame, points clipped to it */
 } mk_manifold_mode;
 
+/* mk_manifold_cache.flags: set by the host (see the contract). */
+#define MK_MANIFOLD_TOUCHING_ONLY 1u /* no speculative points; the margin still bounds the warm state */
+
 /* Per-pair state carried from one frame to the next. Zero it (or pass NULL)
- * for a cold start, then set `mode` if the default does not suit; keep one
- * per body pair and pass the shapes in the same order every frame. To
- * restart a pair cold, zero it and set the mode again. */
+ * for a cold start, then set `mode` and `flags` if the defaults do not suit;
+ * keep one per body pair and pass the shapes in the same order every frame.
+ * To restart a pair cold, zero it and set the mode and flags again. */
 typedef struct mk_manifold_cache {
     mk_gjk_cache gjk;   /* GJK warm start of pairs without a closed form */
     int reference;      /* internal: 1 / 2 when the last manifold was clipped against a face of A / B */
@@ -143,6 +154,7 @@ typedef struct mk_manifold_cache {
     int axis;           /* internal: kind of the last SAT axis of a box or hull pair, 0 = none; for a pair
                          * that was apart, its separating axis (with reference and face) */
     mk_manifold_mode mode; /* set by the host, read only by mk_collide */
+    unsigned flags;        /* MK_MANIFOLD_* flags, set by the host, read only by mk_collide */
 } mk_manifold_cache;
 
 /* The contact manifold of shapes a (pose xa) and b (pose xb). `margin` >= 0:

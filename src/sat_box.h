@@ -1,0 +1,238 @@
+/* sat_box.h: the 15-axis SAT of two box cores in closed form (internal).
+ *
+ * mk_sat_box_box_inl is mk_sat_box_box (sat.h: the same contract, answer
+ * and indices as mk_sat on box views) as an inline function, so that each
+ * caller gets it specialised for its options: mk_collide's box pair
+ * (box_box.c: a margin and the hysteresis) and mk_distance's (distance.c:
+ * pairs whose faces overlap, stop at a separating edge axis, no
+ * preference). One implementation; the
+ * out-of-line mk_sat_box_box (box_box.c) is the same code for the tests
+ * and demos/bench_sat. Complexity O(1): 6 face axes, then 9 edge axes
+ * unless a face already separates by more than opt->stop_above.
+ *
+ * Which form runs, measured in session 10 (load 6-10 on 2 cores; timings
+ * are ratios to ODE's dCollide in the same run, medians of 4-10 A/B runs
+ * under nice -15): one form for both callers, every axis computed and the
+ * best kept by selects (no data-dependent branch until the early stop
+ * after the six faces), because on random poses which axis wins is data a
+ * branch predictor does not learn. The nine edge pairs share the nine 2x2
+ * minors of R that give B's extent along their axes (each serves two
+ * pairs). Against session 9's form (faces stopping after A's three, each
+ * minor computed twice): demos/bench_contacts instructions per run
+ * (callgrind, --toggle-collect=mk_collide_pose / mk_collide, --loops 2)
+ * stacked -2.8 %, random -3.5 %, apart +1.6..3.8 % (B's faces are computed
+ * when A's already separate); time (pose and cold ÷ dCollide) within
+ * +-5 %, cold apart 10-13 % faster; Bullet's 1000_stack collision phase (demos/bullet_split.sh,
+ * 300 steps) 2713.8 -> 2677.9 M, mk_collide_pose 1495.5 -> 1459.6 M.
+ * Tried and not kept: (1) the same code with branches instead of selects
+ * (a constant flag per caller): demos/bench_narrow's box families 1-10 %
+ * faster with its 200 cases per family, which it repeats in the same order
+ * (a predictor learns part of it), but with --n 2000 separated rows 12-14 %
+ * slower; bench_contacts stacked and random 5-13 % slower. (2) Ranking the
+ * edge pairs by sep |sep| = g |g| / |L|^2 (one division instead of a square
+ * root and a division per pair, or a cross-multiplied comparison): more
+ * instructions (862 against 814 per call on random pairs, a scratch driver)
+ * and 4-5 % slower; the cross-multiplied form compiled its double selects
+ * to branches. The square roots and divisions are not the bottleneck at
+ * about 3.3 instructions per cycle.
+ */
+#ifndef MINKO_SAT_BOX_H
+#define MINKO_SAT_BOX_H
+
+#include "manifold_internal.h"
+#include "sat.h"
+
+/* Box edge ID of the edge along `axis` at the corner whose other two
+ * coordinates have the signs of s (minko/manifold.h numbering). */
+static inline int mk_box_edge_at_(int axis, const mk_real *s)
+{
+    int lo = axis == 0 ? 1 : 0, hi = axis == 2 ? 1 : 2;
+    return 4 * axis + (s[lo] > 0) + 2 * (s[hi] > 0);
+}
+
+/* Edge pair (e_i of A, R_j of B): axis L = e_i x R_j = (0, -R_i2j, R_i1j) in
+ * the cyclic order (i, i1, i2). A's extent along L is |R_i2j| a_i1 +
+ * |R_i1j| a_i2; B's is sum_k |(R^T L)_k| b_k, from the products (the minors
+ * of edge_minor) rather than the cofactor identity of a rotation, which the
+ * rounded R satisfies only to a few ulps (and the division by a small |L|
+ * would magnify). Returns the gap g along the unnormalised L (the
+ * separation is g / |L|) and *l2 = |L|^2 from L's two components, with no
+ * cancellation near parallel. */
+MK_ALWAYS_INLINE mk_real edge_gap(mk_real r[3][3], mk_real ar[3][3], mk_real am[3][3], const mk_real *a, const mk_real *b, const mk_real *d,
+                                  int i, int j, mk_real *l2)
+{
+    int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+    *l2 = r[i1][j] * r[i1][j] + r[i2][j] * r[i2][j];
+    return mk_fabs_(r[i1][j] * d[i2] - r[i2][j] * d[i1]) - (ar[i2][j] * a[i1] + ar[i1][j] * a[i2]) - am[i][j] * b[j1] - am[i][j2] * b[j2];
+}
+
+/* |(R^T L)_k1| for L = e_i x R_k (k1 = k + 1; the component along k2 is
+ * the same minor for L = e_i x R_k2, negated): the minor of rows i + 1,
+ * i + 2 and columns k, k + 1 of R. Each of the nine is shared by two edge
+ * pairs, so edge_gap takes them computed once. */
+MK_ALWAYS_INLINE mk_real edge_minor(mk_real r[3][3], int i, int k)
+{
+    int i1 = (i + 1) % 3, i2 = (i + 2) % 3, k1 = (k + 1) % 3;
+    return mk_fabs_(r[i1][k] * r[i2][k1] - r[i2][k] * r[i1][k1]);
+}
+
+/* Is an edge pair with |L|^2 = l2 counted? Pairs closer to parallel are
+ * not: their L has no reliable direction (sat.h, MK_SAT_PARALLEL). */
+MK_ALWAYS_INLINE int edge_counted(mk_real l2) { return l2 > MK_SAT_PARALLEL * MK_SAT_PARALLEL; }
+
+/* The best edge pair so far, k = 3 i + j for e_i of A and R_j of B (-1:
+ * none), and its separation g / |L|. All nine are computed in full and the
+ * best kept by a maximum and an integer select, without a branch on the
+ * data: on random poses every test that skipped an axis early (a parallel
+ * pair, one that cannot beat the faces) was a coin flip to the branch
+ * predictor, and its misses cost more time than the nine square roots and
+ * divisions it saved (random boxes in demos/bench_contacts: 350 -> 272 ns
+ * per call, session 8). */
+typedef struct box_edges { mk_real sep; int k; } box_edges;
+
+MK_ALWAYS_INLINE void box_edge_axis(mk_real r[3][3], mk_real ar[3][3], mk_real am[3][3], const mk_real *a, const mk_real *b,
+                                    const mk_real *d, int i, int j, box_edges *best)
+{
+    mk_real l2, g = edge_gap(r, ar, am, a, b, d, i, j, &l2), sep;
+    int ok = edge_counted(l2);
+    sep = g / mk_sqrt_(ok ? l2 : 1);
+    best->k = mk_sel_int(ok & (sep > best->sep), 3 * i + j, best->k);
+    best->sep = mk_max(best->sep, ok ? sep : -MK_REAL_MAX);
+}
+
+MK_ALWAYS_INLINE void box_edges_init(box_edges *e)
+{
+    e->sep = -MK_REAL_MAX;
+    e->k = -1;
+}
+
+/* The best edge pair's separation (-MK_REAL_MAX: none). */
+MK_ALWAYS_INLINE mk_real box_edges_sep(const box_edges *e) { return e->sep; }
+
+/* The kind, features, separation and normal of edge pair (e_i of A, R_j
+ * of B) into *out: L = e_i x R_j pointing from A to B; A's supporting edge
+ * sits at the corner with the signs of L, B's at the corner with those of
+ * -R^T L. Reads rows (i + 1) % 3 and (i + 2) % 3 of r and the same entries
+ * of d; row i and d[i] are multiplied by L_i = 0 only. */
+static inline void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, mk_real sep, mk_sat_result *out)
+{
+    /* The lower half-edge of each box edge ID, in polytope.h's box view. */
+    static const unsigned char box_half_edge[12] = {11, 15, 9, 13, 2, 4, 0, 6, 3, 7, 1, 5};
+    static const unsigned char next[3] = {1, 2, 0}, prev[3] = {2, 0, 1};
+    int i1 = next[i], i2 = prev[i], lo = j == 0 ? 1 : 0, hi = j == 2 ? 1 : 2;
+    mk_real L[3], blo, bhi, l;
+    L[i] = 0, L[i1] = -r[i2][j], L[i2] = r[i1][j];
+    if (L[0] * d[0] + L[1] * d[1] + L[2] * d[2] < 0) L[0] = -L[0], L[1] = -L[1], L[2] = -L[2];
+    /* The two components of -R^T L that name B's edge (mk_box_edge_at_(j, .)). */
+    blo = -(r[0][lo] * L[0] + r[1][lo] * L[1] + r[2][lo] * L[2]);
+    bhi = -(r[0][hi] * L[0] + r[1][hi] * L[1] + r[2][hi] * L[2]);
+    l = mk_sqrt_(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+    out->kind = MK_SAT_EDGES;
+    out->a = box_half_edge[mk_box_edge_at_(i, L)];
+    out->b = box_half_edge[4 * j + (blo > 0) + 2 * (bhi > 0)];
+    out->separation = sep;
+    out->normal = mk_v3(L[0] / l, L[1] / l, L[2] / l);
+}
+
+
+/* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
+ * frame), so every axis below is a few multiply-adds on scalars. Only the
+ * index of the best axis of each kind is kept while testing; its normal is
+ * built once at the end. The early stop looks at whole groups (the six faces,
+ * then the edges): the answer is then the best of the groups tested. */
+/* A's face axis i and B's face axis j (B's offset along it into db[j]),
+ * spelled out for constant indices like the edges. */
+MK_ALWAYS_INLINE void box_face_a(mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i, mk_real *best, int *at)
+{
+    mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
+    *at = mk_sel_int(sep > *best, i, *at);
+    *best = mk_max(*best, sep);
+}
+
+MK_ALWAYS_INLINE void box_face_b(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, mk_real *db, int j,
+                                 mk_real *best, int *at)
+{
+    mk_real sep;
+    db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
+    sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
+    *at = mk_sel_int(sep > *best, j, *at);
+    *best = mk_max(*best, sep);
+}
+
+MK_ALWAYS_INLINE void mk_sat_box_box_inl(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3], sa = -MK_REAL_MAX, sb = -MK_REAL_MAX, stop = opt->stop_above;
+    mk_real se = -MK_REAL_MAX;
+    box_edges e;
+    int fa = 0, fb = -1, stopped;
+    mk_sat_kind kind;
+    r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
+    r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
+    r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
+    /* Spelled out, as every index below: constant indices let the compiler
+     * keep the entries as scalars (a loop here kept r and ar in memory and
+     * reloaded rows of r in 16-byte halves its 8-byte stores could not
+     * forward: a stall per row). */
+    ar[0][0] = mk_fabs_(r[0][0]), ar[0][1] = mk_fabs_(r[0][1]), ar[0][2] = mk_fabs_(r[0][2]);
+    ar[1][0] = mk_fabs_(r[1][0]), ar[1][1] = mk_fabs_(r[1][1]), ar[1][2] = mk_fabs_(r[1][2]);
+    ar[2][0] = mk_fabs_(r[2][0]), ar[2][1] = mk_fabs_(r[2][1]), ar[2][2] = mk_fabs_(r[2][2]);
+    a[0] = ha.x, a[1] = ha.y, a[2] = ha.z;
+    b[0] = hb.x, b[1] = hb.y, b[2] = hb.z;
+    d[0] = t.x, d[1] = t.y, d[2] = t.z;
+    box_edges_init(&e);
+    /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
+    box_face_a(ar, a, b, d, 0, &sa, &fa);
+    box_face_a(ar, a, b, d, 1, &sa, &fa);
+    box_face_a(ar, a, b, d, 2, &sa, &fa);
+    /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along
+     * +R_j. The six faces are one group for the early stop: the best face
+     * is then reported (a pair apart along B's face more than along A's is
+     * named by B's, which certifies mk_distance's gap), and there is no
+     * branch between A's faces and B's. */
+    box_face_b(r, ar, a, b, d, db, 0, &sb, &fb);
+    box_face_b(r, ar, a, b, d, db, 1, &sb, &fb);
+    box_face_b(r, ar, a, b, d, db, 2, &sb, &fb);
+    stopped = mk_max(sa, sb) > stop;
+    /* Edge pairs: only the winner's normal and features are worked out. */
+    if (!stopped) {
+        /* Spelled out: with constant indices the axes' terms stay in registers. */
+        mk_real am[3][3];
+        am[0][0] = edge_minor(r, 0, 0), am[0][1] = edge_minor(r, 0, 1), am[0][2] = edge_minor(r, 0, 2);
+        am[1][0] = edge_minor(r, 1, 0), am[1][1] = edge_minor(r, 1, 1), am[1][2] = edge_minor(r, 1, 2);
+        am[2][0] = edge_minor(r, 2, 0), am[2][1] = edge_minor(r, 2, 1), am[2][2] = edge_minor(r, 2, 2);
+        box_edge_axis(r, ar, am, a, b, d, 0, 0, &e);
+        box_edge_axis(r, ar, am, a, b, d, 0, 1, &e);
+        box_edge_axis(r, ar, am, a, b, d, 0, 2, &e);
+        box_edge_axis(r, ar, am, a, b, d, 1, 0, &e);
+        box_edge_axis(r, ar, am, a, b, d, 1, 1, &e);
+        box_edge_axis(r, ar, am, a, b, d, 1, 2, &e);
+        box_edge_axis(r, ar, am, a, b, d, 2, 0, &e);
+        box_edge_axis(r, ar, am, a, b, d, 2, 1, &e);
+        box_edge_axis(r, ar, am, a, b, d, 2, 2, &e);
+        se = box_edges_sep(&e);
+        stopped = se > stop;
+    }
+    /* The normal and feature indices of the chosen axis only. */
+    kind = mk_sat_choose(sa, sb, se, e.k >= 0, stopped, opt, out);
+    out->kind = kind;
+    if (kind == MK_SAT_FACE_A) {
+        mk_real si = d[fa] >= 0 ? 1 : -1;
+        out->a = 2 * fa + (d[fa] >= 0);
+        out->b = -1;
+        out->separation = sa;
+        /* From a table: the normal built from three selects was stored in
+         * halves and reloaded whole (a store-forwarding stall per call). */
+        static const mk_vec3 unit[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+        out->normal = mk_v3_scale(unit[fa], si);
+    } else if (kind == MK_SAT_FACE_B) {
+        mk_real sj = db[fb] >= 0 ? 1 : -1;
+        out->a = -1;
+        out->b = 2 * fb + (db[fb] < 0);
+        out->separation = sb;
+        out->normal = mk_v3(sj * r[0][fb], sj * r[1][fb], sj * r[2][fb]);
+    } else {
+        edge_result(r, d, e.k / 3, e.k % 3, se, out);
+    }
+}
+
+#endif
