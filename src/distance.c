@@ -568,24 +568,32 @@ MK_ALWAYS_INLINE int box_box_overlap(const mk_pair *p, const box_faces *f, mk_re
  * (parallel_faces 71 -> 82 ns with 2000 cases per family, load 8): the
  * face pass's branches let a separated pair's witnesses start early.
  *
- * Session 11: the face separations are computed once (box_faces_of) for
- * the face pass and the SAT's search; pairs whose faces overlap take the
- * search's raw answer (box_sat_axes: best face of each box, best edge pair
- * by index) and build only the winner's normal and witnesses, with no
- * mk_sat_result (no half-edge names to encode and decode again); the rare
- * general tests are out of line (axis_witnesses). Instructions per query,
- * same command, before -> after: penetrating box_box 1334 -> 1248,
- * thin_rods 1449 -> 1291, parallel_faces 1311 -> 1270, deep 1337 -> 1249,
- * flat 1352 -> 1258; separated thin_rods 1456 -> 1302, flat 1557 -> 1601,
- * box_box 1567 -> 1611, parallel_faces 793 -> 807, deep 1352 -> 1392 (the
- * separated path's code is the same; -O2 now stores the pair's fields one
- * by one where it stored them in pairs, and inlines corner_pair
+ * Session 11: the face separations are computed once (box_faces_of);
+ * whether any separates is one maximum, and only a separated pair runs the
+ * face pass's branchy choice (box_face_axes), which on overlapping pairs
+ * was about one misprediction per query. Pairs whose faces overlap take
+ * the SAT search's raw answer (box_sat_axes: best face of each box, best
+ * edge pair by index) and build only the winner's normal and witnesses,
+ * with no mk_sat_result (no half-edge names to encode and decode again);
+ * the rare general tests are out of line (axis_witnesses). Instructions
+ * per query, same command, before -> after: penetrating box_box 1334 ->
+ * 1220, thin_rods 1449 -> 1265, parallel_faces 1311 -> 1240, deep 1337 ->
+ * 1221, flat 1352 -> 1231; separated thin_rods 1456 -> 1276, flat 1557 ->
+ * 1609, box_box 1567 -> 1618, parallel_faces 793 -> 821, deep 1352 -> 1401
+ * (the separated path's code is the same; -O2 now stores the pair's fields
+ * one by one where it stored them in pairs, and inlines corner_pair
  * differently: the separated path out of line, the fallback inline, d and
  * n by value into axis_witnesses, each measured, did not win it back).
- * Of parallel_faces' penetrating pairs, 280 of 1600 have an edge axis
- * ahead of the faces by rounding whose edges do not realise it (parallel
- * edges); they are answered by the face tests with the edge's normal, as
- * before, at about twice the cost. */
+ * Mispredictions (callgrind --branch-sim=yes), penetrating thin_rods: 4.3
+ * -> 2.5 per query. Of parallel_faces' penetrating pairs, 280 of 1600 have
+ * an edge axis ahead of the faces by rounding whose edges do not realise it
+ * (parallel edges); they are answered by the face tests with the edge's
+ * normal, as before, at about twice the cost. Tried and not kept (load
+ * 11-13, A/B medians of 4 runs with --n 1000): the faces' witnesses first
+ * for such near ties (parallel_faces 1270 -> 1237 instructions, time within
+ * noise, thin_rods no better); the edge witnesses' corner signs and the
+ * edge normal's flip as sign products instead of branches (+22
+ * instructions, no fewer mispredictions, thin_rods x0.84 -> x0.94). */
 static int box_box_sat(const mk_pair *p, answer *ans)
 {
     mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, n, pa, pb;
@@ -593,8 +601,13 @@ static int box_box_sat(const mk_pair *p, answer *ans)
     int of_b;
     box_faces f;
     box_faces_of(ha, hb, &p->r, p->t, &f);
-    d = box_face_axes(p, &f, &n, &of_b);
-    if (!(d > 0 ? box_box_apart(p, of_b, tol, &d, &n, &pa, &pb) : box_box_overlap(p, &f, tol, &d, &n, &pa, &pb))) return 0;
+    /* Which path, without the face pass's branches (a pair whose faces
+     * overlap does not need them: about one misprediction per query). */
+    if (mk_max(mk_max(mk_max(f.sa.x, f.sa.y), mk_max(f.sa.z, f.sb.x)), mk_max(f.sb.y, f.sb.z)) > 0) {
+        d = box_face_axes(p, &f, &n, &of_b);
+        if (!box_box_apart(p, of_b, tol, &d, &n, &pa, &pb)) return 0;
+    } else if (!box_box_overlap(p, &f, tol, &d, &n, &pa, &pb))
+        return 0;
     witnesses(pa, pb, d, n, &pa, &pb);
     ans->hit = grow_core(pa, pb, d, n, p);
     ans->iterations = 15;
