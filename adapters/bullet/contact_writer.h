@@ -68,7 +68,15 @@
 // 12.2k +- 0.65k ('worse'); the merge alone (session-10 eviction) 14.5k +-
 // 1.3k; an area rule among the unreported slots only (every reported point
 // kept) 13.7k +- 0.61k with max_pen 0.90 -- it keeps the 1:1000 advantage
-// (0.734 +- 0.054, end_pen 5e-7), as the merge alone does.
+// (0.734 +- 0.054, end_pen 5e-7), as the merge alone does. The 1:1000
+// collapse and the pile's damping both follow Bullet's own area formula
+// (sortCachedPoints: one fixed pairing of the corners, the deepest cached
+// point kept even when not reported): with the true quadrilateral area
+// (the largest cross product of its three pairings) over every slot, the
+// 1:1000 slab holds (max_pen 0.723 +- 0.04 keeping the deepest reported
+// point, 0.773 +- 0.054 keeping the deepest of all) but the pile keeps its
+// energy: 13.7k +- 1.1k, max_pen 0.91 +- 0.066, and 12.6k +- 1.3k, max_pen
+// 1.21 +- 0.087 ('worse'). No rule measured so far has both.
 //
 // Not kept (session 10, same command, ke_end): every box point through
 // addContactPoint (no feature keys, which the issue asks for) 11.7k +- 1.0k
