@@ -228,9 +228,16 @@ public:
         // touching. Measured on the native convex stack's poses (960 Taru
         // hulls, margin 0.04): Bullet's depths are the cores', 0.080 shallower
         // than the rounded solids'.
-        mk_shape sa = m_a.shape, sb = m_b.shape;
+        // (Copied only then: two shape copies per pair step cost 22 M
+        // instructions per 300 steps of the 3000 boxes.)
         const bool hulls = polyhedral_hulls(wa->getCollisionShape(), wb->getCollisionShape());
-        if (hulls) sa.radius = sb.radius = 0;
+        mk_shape cores[2];
+        if (hulls) {
+            cores[0] = m_a.shape;
+            cores[1] = m_b.shape;
+            cores[0].radius = cores[1].radius = 0;
+        }
+        const mk_shape &sa = hulls ? cores[0] : m_a.shape, &sb = hulls ? cores[1] : m_b.shape;
         // The cheap tests only for pairs without cached points: a pair that
         // touched last frame mostly still does (on the 1000 stack the tests
         // never succeed for them), and mk_collide answers one that parted.
@@ -255,6 +262,11 @@ public:
                 st = write_candidates(result, sa, pa, sb, pb, threshold, flip);
                 if (st == MK_OK) return;
             } else if (st == MK_OK) {
+                // No reuse of the last manifold for a pose that did not move:
+                // measured (300 steps, relative pose of the pair against its
+                // previous mk_collide call), none is unchanged: 1000 stack 60
+                // of 484,827 calls within 1e-6, 0 bit-identical transforms;
+                // 3000 boxes 0 of 936,632. Resting Bullet boxes jitter more.
                 st = mk_collide_pose(&sa, pa, &sb, pb, threshold, &m_cache, &mf);
                 if (st == MK_OK && boxes && mf.count == 0) m_apart_face = apart_face(sa, sb, ta, tb, threshold);
             }
