@@ -174,6 +174,19 @@ MK_ALWAYS_INLINE mk_vec3 box_edge_centre(mk_vec3 h, mk_vec3 dir, int axis)
     return mk_v3(axis == 0 ? 0 : dir.x >= 0 ? h.x : -h.x, axis == 1 ? 0 : dir.y >= 0 ? h.y : -h.y, axis == 2 ? 0 : dir.z >= 0 ? h.z : -h.z);
 }
 
+/* The unit normal of edge pair (e_i of A, R_j of B), from A towards B, as
+ * the SAT's result gives it (sat_box.h, edge_result): L = e_i x R_j turned
+ * along t, divided by its length. */
+MK_ALWAYS_INLINE mk_vec3 edge_normal(const mk_pair *p, int i, int j)
+{
+    mk_vec3 v = j == 0 ? p->r.c0 : j == 1 ? p->r.c1 : p->r.c2, L;
+    mk_real l;
+    L = i == 0 ? mk_v3(0, -v.z, v.y) : i == 1 ? mk_v3(v.z, 0, -v.x) : mk_v3(-v.y, v.x, 0);
+    if (mk_v3_dot(L, p->t) < 0) L = mk_v3_neg(L);
+    l = mk_sqrt_(mk_v3_len2(L));
+    return mk_v3(L.x / l, L.y / l, L.z / l);
+}
+
 /* Witnesses of SAT's edge axis n (separation d): the closest points of the
  * two edges it names, A's s e_i about its midpoint ca and B's cb + t R_j
  * (unit directions: mk_segment_params with the constants a = e = 1 and
@@ -182,10 +195,8 @@ MK_ALWAYS_INLINE mk_vec3 box_edge_centre(mk_vec3 h, mk_vec3 dir, int axis)
  * added, so an edge tiny next to the distance keeps its direction).
  * Returns 1 when they are d apart along n (to tol): then they are the
  * witnesses, exact. */
-MK_ALWAYS_INLINE int edge_witnesses(const mk_pair *p, const mk_sat_result *s, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa,
-                                    mk_vec3 *pb)
+MK_ALWAYS_INLINE int edge_witnesses(const mk_pair *p, int i, int j, mk_real d, mk_vec3 n, mk_real tol, mk_vec3 *pa, mk_vec3 *pb)
 {
-    int i = mk_box_hull_edge_id(s->a) / 4, j = mk_box_hull_edge_id(s->b) / 4;
     mk_vec3 v = j == 0 ? p->r.c0 : j == 1 ? p->r.c1 : p->r.c2, ha = p->a->u.half_extents, hb = p->b->u.half_extents;
     mk_vec3 ca = box_edge_centre(ha, n, i), cb = mk_v3_add(mk_mat3_mul_v3(p->r, box_edge_centre(hb, mk_mat3_tmul_v3(p->r, mk_v3_neg(n)), j)), p->t);
     mk_vec3 c = mk_v3_sub(cb, ca);
@@ -425,16 +436,12 @@ static int corner_witnesses(const mk_pair *p, mk_vec3 n, mk_real tol, mk_real *d
     return corner_certified(p, side, corner, tol, d, pa, pb);
 }
 
-/* The best of the six face axes of two box cores (A's e_i, B's R_j, each
- * turned to point from A towards B) in closed form: the face-axis half of
- * SAT, which a separated pair often needs alone (box_box_sat). */
-static mk_real box_face_axes(const mk_pair *p, mk_vec3 *n, int *of_b)
+/* The best of the six face axes of two box cores (f: box_faces_of), turned
+ * to point from A towards B, with branches: a separated pair's witnesses
+ * start from it before the selects of the SAT would have settled. */
+static mk_real box_face_axes(const mk_pair *p, const box_faces *f, mk_vec3 *n, int *of_b)
 {
-    mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, tb = mk_mat3_tmul_v3(p->r, p->t);
-    mk_mat3 ar = mk_mat3_abs(p->r);
-    /* B's extent along A's axes is |R| hb, A's along B's is |R|^T ha. */
-    mk_vec3 sa = mk_v3_sub(mk_v3_sub(mk_v3_abs(p->t), ha), mk_mat3_mul_v3(ar, hb));
-    mk_vec3 sb = mk_v3_sub(mk_v3_sub(mk_v3_abs(tb), hb), mk_mat3_tmul_v3(ar, ha));
+    mk_vec3 sa = f->sa, sb = f->sb, tb = f->tb;
     mk_real best = sa.x, s;
     int axis = 0;
     if (sa.y > best) best = sa.y, axis = 1;
@@ -452,6 +459,81 @@ static mk_real box_face_axes(const mk_pair *p, mk_vec3 *n, int *of_b)
         *n = mk_v3_scale(axis == 3 ? p->r.c0 : axis == 4 ? p->r.c1 : p->r.c2, s);
     }
     return best;
+}
+
+/* SAT's best axis (kind; ei, ej: the edges of an edge pair) when the
+ * witnesses its own features give fail (separated pairs the face pass and
+ * the corner walk did not certify, ties at rounding level): an edge pair's
+ * two edges, then the faces either way, then for a gap the corners. Out of
+ * line: rare, and the hot paths keep their registers. */
+static MK_NOINLINE int axis_witnesses(const mk_pair *p, mk_sat_kind kind, int ei, int ej, mk_real tol, mk_real *d, mk_vec3 *n, mk_vec3 *pa,
+                                      mk_vec3 *pb)
+{
+    if (!(*d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
+    if (kind == MK_SAT_EDGES && edge_witnesses(p, ei, ej, *d, *n, tol, pa, pb)) return 1;
+    /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
+    if (face_witnesses(p, *d, *n, tol, pa, pb)) return 1;
+    /* Apart, but no feature pair realises SAT's bound: a corner may. */
+    if (!(*d > 0) || !corner_witnesses(p, *n, tol, d, pa, pb)) return 0;
+    *n = mk_v3_scale(mk_v3_sub(*pb, *pa), 1 / *d);
+    return 1;
+}
+
+/* Cores apart along a face (d > 0 along n, of B when of_b): B's corner
+ * under A's face, or A's under B's; else a corner and its clamp, or two
+ * edges at the last corners tried, certified along their own direction (no
+ * SAT bound needed: vertex-edge, vertex-vertex and most edge-edge pairs skip
+ * the nine edge axes); else every axis. */
+MK_ALWAYS_INLINE int box_box_apart(const mk_pair *p, int of_b, mk_real tol, mk_real *d, mk_vec3 *n, mk_vec3 *pa, mk_vec3 *pb)
+{
+    mk_sat_options o;
+    mk_sat_result s;
+    int fa, fb;
+    if (of_b ? face_witness_on_b(p, *d, *n, tol, pa, pb) : face_witness_on_a(p, *d, *n, tol, pa, pb)) return 1;
+    if (corner_walk(p, *n, tol, &fa, &fb, d, pa, pb) || edge_pairs_certified(p, fa, fb, tol, d, pa, pb)) {
+        *n = mk_v3_scale(mk_v3_sub(*pb, *pa), 1 / *d);
+        return 1;
+    }
+    o = mk_sat_defaults();
+    mk_sat_box_box(p->a->u.half_extents, p->b->u.half_extents, &p->r, p->t, &o, &s);
+    *d = s.best;
+    *n = s.normal;
+    if (s.kind != MK_SAT_EDGES) return axis_witnesses(p, s.kind, 0, 0, tol, d, n, pa, pb);
+    return axis_witnesses(p, s.kind, mk_box_hull_edge_id(s.a) / 4, mk_box_hull_edge_id(s.b) / 4, tol, d, n, pa, pb);
+}
+
+/* Cores whose faces overlap (f: their face separations): the inlined SAT's
+ * search (an edge axis may still separate), its best axis as mk_sat_choose
+ * picks it with no preference (ties to A's faces, then B's, then edges),
+ * and the witnesses of that axis: the two edges it names, A's corner under
+ * B's face, or B's deepest corner over A's. */
+MK_ALWAYS_INLINE int box_box_overlap(const mk_pair *p, const box_faces *f, mk_real tol, mk_real *d, mk_vec3 *n, mk_vec3 *pa, mk_vec3 *pb)
+{
+    static const mk_vec3 unit[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    mk_sat_kind kind;
+    box_axes x;
+    int ok;
+    box_sat_axes(p->a->u.half_extents, p->b->u.half_extents, &p->r, p->t, f, 0, &x);
+    if (x.se > mk_max(x.sa, x.sb)) {
+        int i = x.k / 3, j = x.k % 3;
+        kind = MK_SAT_EDGES;
+        *d = x.se;
+        *n = edge_normal(p, i, j);
+        ok = edge_witnesses(p, i, j, *d, *n, tol, pa, pb);
+    } else if (x.sb > x.sa) {
+        kind = MK_SAT_FACE_B;
+        *d = x.sb;
+        *n = mk_v3_scale(x.fb == 0 ? p->r.c0 : x.fb == 1 ? p->r.c1 : p->r.c2, (x.fb == 0 ? f->tb.x : x.fb == 1 ? f->tb.y : f->tb.z) >= 0 ? 1 : -1);
+        ok = corner_under_b(p, *d, *n, tol, pa, pb) || face_witness_on_b(p, *d, *n, tol, pa, pb) || face_witness_on_a(p, *d, *n, tol, pa, pb);
+    } else {
+        kind = MK_SAT_FACE_A;
+        *d = x.sa;
+        *n = mk_v3_scale(unit[x.fa], (x.fa == 0 ? p->t.x : x.fa == 1 ? p->t.y : p->t.z) >= 0 ? 1 : -1);
+        ok = face_witness_on_a(p, *d, *n, tol, pa, pb) || face_witness_on_b(p, *d, *n, tol, pa, pb);
+    }
+    /* Each box's features along the axis were tried; an edge pair that
+     * separates may still be realised by a corner. */
+    return ok || (kind == MK_SAT_EDGES && axis_witnesses(p, MK_SAT_NONE, 0, 0, tol, d, n, pa, pb));
 }
 
 /* Box cores by SAT's 15 axes (face normals and edge cross products of the
@@ -484,49 +566,35 @@ static mk_real box_face_axes(const mk_pair *p, mk_vec3 *n, int *of_b)
  * a separating face group, no face pass first): penetrating pairs 30-40
  * instructions fewer, but separated face pairs 5-19 % slower in time
  * (parallel_faces 71 -> 82 ns with 2000 cases per family, load 8): the
- * face pass's branches let a separated pair's witnesses start early. */
+ * face pass's branches let a separated pair's witnesses start early.
+ *
+ * Session 11: the face separations are computed once (box_faces_of) for
+ * the face pass and the SAT's search; pairs whose faces overlap take the
+ * search's raw answer (box_sat_axes: best face of each box, best edge pair
+ * by index) and build only the winner's normal and witnesses, with no
+ * mk_sat_result (no half-edge names to encode and decode again); the rare
+ * general tests are out of line (axis_witnesses). Instructions per query,
+ * same command, before -> after: penetrating box_box 1334 -> 1248,
+ * thin_rods 1449 -> 1291, parallel_faces 1311 -> 1270, deep 1337 -> 1249,
+ * flat 1352 -> 1258; separated thin_rods 1456 -> 1302, flat 1557 -> 1601,
+ * box_box 1567 -> 1611, parallel_faces 793 -> 807, deep 1352 -> 1392 (the
+ * separated path's code is the same; -O2 now stores the pair's fields one
+ * by one where it stored them in pairs, and inlines corner_pair
+ * differently: the separated path out of line, the fallback inline, d and
+ * n by value into axis_witnesses, each measured, did not win it back).
+ * Of parallel_faces' penetrating pairs, 280 of 1600 have an edge axis
+ * ahead of the faces by rounding whose edges do not realise it (parallel
+ * edges); they are answered by the face tests with the edge's normal, as
+ * before, at about twice the cost. */
 static int box_box_sat(const mk_pair *p, answer *ans)
 {
-    mk_sat_options o = mk_sat_defaults();
-    mk_sat_result s;
     mk_vec3 ha = p->a->u.half_extents, hb = p->b->u.half_extents, n, pa, pb;
     mk_real tol = 64 * MK_REAL_EPSILON * (mk_v3_max_abs(ha) + mk_v3_max_abs(hb) + mk_v3_max_abs(p->t)), d;
-    int ok = 0, of_b, fa, fb;
-    d = box_face_axes(p, &n, &of_b);
-    if (d > 0) {
-        /* Apart along a face: B's corner under A's face, or A's under B's;
-         * else a corner and its clamp, or two edges at the last corners
-         * tried, certified along their own direction (no SAT bound needed:
-         * vertex-edge, vertex-vertex and most edge-edge pairs skip the nine
-         * edge axes); else every axis. */
-        ok = of_b ? face_witness_on_b(p, d, n, tol, &pa, &pb) : face_witness_on_a(p, d, n, tol, &pa, &pb);
-        if (!ok && (corner_walk(p, n, tol, &fa, &fb, &d, &pa, &pb) || edge_pairs_certified(p, fa, fb, tol, &d, &pa, &pb))) {
-            n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
-            ok = 1;
-        }
-        if (!ok) mk_sat_box_box(ha, hb, &p->r, p->t, &o, &s);
-    } else {
-        /* The faces overlap: the inlined SAT (an edge axis may still
-         * separate), and the witnesses of its own axis. */
-        o.stop_above = 0;
-        mk_sat_box_box_inl(ha, hb, &p->r, p->t, &o, &s);
-        if (s.kind == MK_SAT_FACE_B) ok = corner_under_b(p, s.best, s.normal, tol, &pa, &pb) || face_witness_on_b(p, s.best, s.normal, tol, &pa, &pb);
-        else if (s.kind == MK_SAT_FACE_A) ok = face_witness_on_a(p, s.best, s.normal, tol, &pa, &pb);
-        d = s.best;
-        n = s.normal;
-    }
-    if (!ok) {
-        d = s.best;
-        n = s.normal;
-        if (!(d > -MK_REAL_MAX)) return 0; /* no axis at all (cannot happen for valid boxes) */
-        if (s.kind == MK_SAT_EDGES) ok = edge_witnesses(p, &s, d, n, tol, &pa, &pb);
-        /* A face axis, or an edge axis that is a face normal too (parallel boxes). */
-        if (!ok && !face_witnesses(p, d, n, tol, &pa, &pb)) {
-            /* Apart, but no feature pair realises SAT's bound: a corner may. */
-            if (!(d > 0) || !corner_witnesses(p, n, tol, &d, &pa, &pb)) return 0;
-            n = mk_v3_scale(mk_v3_sub(pb, pa), 1 / d);
-        }
-    }
+    int of_b;
+    box_faces f;
+    box_faces_of(ha, hb, &p->r, p->t, &f);
+    d = box_face_axes(p, &f, &n, &of_b);
+    if (!(d > 0 ? box_box_apart(p, of_b, tol, &d, &n, &pa, &pb) : box_box_overlap(p, &f, tol, &d, &n, &pa, &pb))) return 0;
     witnesses(pa, pb, d, n, &pa, &pb);
     ans->hit = grow_core(pa, pb, d, n, p);
     ans->iterations = 15;

@@ -35,6 +35,16 @@
  * and 4-5 % slower; the cross-multiplied form compiled its double selects
  * to branches. The square roots and divisions are not the bottleneck at
  * about 3.3 instructions per cycle.
+ *
+ * Session 11: the search is split so that mk_distance runs it on the face
+ * separations its face pass already has: box_faces_of (the six faces),
+ * box_sat_axes (best face of each box, best edge pair, the early stop),
+ * then mk_sat_box_box_rest_inl builds mk_sat_result (mk_sat_box_box_inl is
+ * the three in a row, the same bits as before). Tried and not kept: the
+ * nine edge pairs as three 3-vectors over j (edge_gap's operations in the
+ * same order, minors as one cross product per axis of A), hoping -O2 would
+ * pack them two to a register: it packed none, and thin_rods' penetrating
+ * queries took 1301 instructions against 1288.
  */
 #ifndef MINKO_SAT_BOX_H
 #define MINKO_SAT_BOX_H
@@ -134,38 +144,50 @@ static inline void edge_result(mk_real r[3][3], const mk_real *d, int i, int j, 
     out->normal = mk_v3(L[0] / l, L[1] / l, L[2] / l);
 }
 
+/* The six face separations of two box cores: sa along A's axes e_i (B's
+ * extent there is |R| hb), sb along B's R_j (A's is |R|^T ha), and tb =
+ * R^T t, B's offset along its own axes (its signs orient B's faces). The
+ * face half of the SAT, computed once per pair: mk_distance decides from it
+ * whether a pair is apart along a face before it runs the edges
+ * (distance.c, box_box_sat), and hands it to mk_sat_box_box_rest_inl. */
+typedef struct box_faces { mk_vec3 sa, sb, tb; } box_faces;
 
-/* Plain arrays: r[i][j] is row i, column j of R (column j = B's axis j in A's
- * frame), so every axis below is a few multiply-adds on scalars. Only the
- * index of the best axis of each kind is kept while testing; its normal is
- * built once at the end. The early stop looks at whole groups (the six faces,
- * then the edges): the answer is then the best of the groups tested. */
-/* A's face axis i and B's face axis j (B's offset along it into db[j]),
- * spelled out for constant indices like the edges. */
-MK_ALWAYS_INLINE void box_face_a(mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, int i, mk_real *best, int *at)
+MK_ALWAYS_INLINE void box_faces_of(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, box_faces *f)
 {
-    mk_real sep = mk_fabs_(d[i]) - a[i] - (ar[i][0] * b[0] + ar[i][1] * b[1] + ar[i][2] * b[2]);
-    *at = mk_sel_int(sep > *best, i, *at);
-    *best = mk_max(*best, sep);
+    mk_mat3 ar = mk_mat3_abs(*R);
+    f->tb = mk_mat3_tmul_v3(*R, t);
+    f->sa = mk_v3_sub(mk_v3_sub(mk_v3_abs(t), ha), mk_mat3_mul_v3(ar, hb));
+    f->sb = mk_v3_sub(mk_v3_sub(mk_v3_abs(f->tb), hb), mk_mat3_tmul_v3(ar, ha));
 }
 
-MK_ALWAYS_INLINE void box_face_b(mk_real r[3][3], mk_real ar[3][3], const mk_real *a, const mk_real *b, const mk_real *d, mk_real *db, int j,
-                                 mk_real *best, int *at)
+/* The best of three face separations (ties to the first) by selects. */
+MK_ALWAYS_INLINE mk_real box_face_best(mk_vec3 s, int *at)
 {
-    mk_real sep;
-    db[j] = r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2];
-    sep = mk_fabs_(db[j]) - b[j] - (ar[0][j] * a[0] + ar[1][j] * a[1] + ar[2][j] * a[2]);
-    *at = mk_sel_int(sep > *best, j, *at);
-    *best = mk_max(*best, sep);
+    mk_real best = mk_max(mk_max(s.x, s.y), s.z);
+    *at = mk_sel_int(s.y > s.x, 1, 0);
+    *at = mk_sel_int(s.z > mk_max(s.x, s.y), 2, *at);
+    return best;
 }
 
-MK_ALWAYS_INLINE void mk_sat_box_box_inl(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+/* The raw answer of the 15 axes: the best face of A (fa, separation sa),
+ * of B (fb, sb) and edge pair (k = 3 i + j, se; -1, -MK_REAL_MAX: none or
+ * not tested), and whether the search stopped early. */
+typedef struct box_axes {
+    mk_real sa, sb, se;
+    int fa, fb, k, stopped;
+} box_axes;
+
+/* The SAT's search with the face separations already known (f, from
+ * box_faces_of on the same ha, hb, R, t), stopping after the faces when one
+ * separates by more than `stop`. Plain arrays: r[i][j] is row i, column j
+ * of R (column j = B's axis j in A's frame), so every edge axis is a few
+ * multiply-adds on scalars. The early stop looks at whole groups (the six
+ * faces, then the edges): the answer is then the best of the groups
+ * tested. */
+MK_ALWAYS_INLINE void box_sat_axes(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const box_faces *f, mk_real stop, box_axes *x)
 {
-    mk_real r[3][3], ar[3][3], a[3], b[3], d[3], db[3], sa = -MK_REAL_MAX, sb = -MK_REAL_MAX, stop = opt->stop_above;
-    mk_real se = -MK_REAL_MAX;
+    mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
     box_edges e;
-    int fa = 0, fb = -1, stopped;
-    mk_sat_kind kind;
     r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
     r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
     r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
@@ -180,21 +202,15 @@ MK_ALWAYS_INLINE void mk_sat_box_box_inl(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *
     b[0] = hb.x, b[1] = hb.y, b[2] = hb.z;
     d[0] = t.x, d[1] = t.y, d[2] = t.z;
     box_edges_init(&e);
-    /* A's faces: B's extent along e_i is sum_j |R_ij| b_j. */
-    box_face_a(ar, a, b, d, 0, &sa, &fa);
-    box_face_a(ar, a, b, d, 1, &sa, &fa);
-    box_face_a(ar, a, b, d, 2, &sa, &fa);
-    /* B's faces: axis R_j; the face of B facing A is -e_j when B lies along
-     * +R_j. The six faces are one group for the early stop: the best face
-     * is then reported (a pair apart along B's face more than along A's is
-     * named by B's, which certifies mk_distance's gap), and there is no
-     * branch between A's faces and B's. */
-    box_face_b(r, ar, a, b, d, db, 0, &sb, &fb);
-    box_face_b(r, ar, a, b, d, db, 1, &sb, &fb);
-    box_face_b(r, ar, a, b, d, db, 2, &sb, &fb);
-    stopped = mk_max(sa, sb) > stop;
+    /* The six faces are one group for the early stop: the best face is then
+     * reported (a pair apart along B's face more than along A's is named by
+     * B's, which certifies mk_distance's gap), and there is no branch
+     * between A's faces and B's. */
+    x->sa = box_face_best(f->sa, &x->fa);
+    x->sb = box_face_best(f->sb, &x->fb);
+    x->stopped = mk_max(x->sa, x->sb) > stop;
     /* Edge pairs: only the winner's normal and features are worked out. */
-    if (!stopped) {
+    if (!x->stopped) {
         /* Spelled out: with constant indices the axes' terms stay in registers. */
         mk_real am[3][3];
         am[0][0] = edge_minor(r, 0, 0), am[0][1] = edge_minor(r, 0, 1), am[0][2] = edge_minor(r, 0, 2);
@@ -209,30 +225,53 @@ MK_ALWAYS_INLINE void mk_sat_box_box_inl(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *
         box_edge_axis(r, ar, am, a, b, d, 2, 0, &e);
         box_edge_axis(r, ar, am, a, b, d, 2, 1, &e);
         box_edge_axis(r, ar, am, a, b, d, 2, 2, &e);
-        se = box_edges_sep(&e);
-        stopped = se > stop;
+        x->stopped = box_edges_sep(&e) > stop;
     }
-    /* The normal and feature indices of the chosen axis only. */
-    kind = mk_sat_choose(sa, sb, se, e.k >= 0, stopped, opt, out);
+    x->se = box_edges_sep(&e);
+    x->k = e.k;
+}
+
+/* mk_sat_box_box_inl with the face separations already known: the search,
+ * then the normal and feature indices of the chosen axis only. */
+MK_ALWAYS_INLINE void mk_sat_box_box_rest_inl(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const box_faces *f,
+                                              const mk_sat_options *opt, mk_sat_result *out)
+{
+    box_axes x;
+    mk_sat_kind kind;
+    box_sat_axes(ha, hb, R, t, f, opt->stop_above, &x);
+    kind = mk_sat_choose(x.sa, x.sb, x.se, x.k >= 0, x.stopped, opt, out);
     out->kind = kind;
     if (kind == MK_SAT_FACE_A) {
-        mk_real si = d[fa] >= 0 ? 1 : -1;
-        out->a = 2 * fa + (d[fa] >= 0);
+        mk_real da = x.fa == 0 ? t.x : x.fa == 1 ? t.y : t.z, si = da >= 0 ? 1 : -1;
+        out->a = 2 * x.fa + (da >= 0);
         out->b = -1;
-        out->separation = sa;
+        out->separation = x.sa;
         /* From a table: the normal built from three selects was stored in
          * halves and reloaded whole (a store-forwarding stall per call). */
         static const mk_vec3 unit[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-        out->normal = mk_v3_scale(unit[fa], si);
+        out->normal = mk_v3_scale(unit[x.fa], si);
     } else if (kind == MK_SAT_FACE_B) {
-        mk_real sj = db[fb] >= 0 ? 1 : -1;
+        mk_real db = x.fb == 0 ? f->tb.x : x.fb == 1 ? f->tb.y : f->tb.z, sj = db >= 0 ? 1 : -1;
+        mk_vec3 c = x.fb == 0 ? R->c0 : x.fb == 1 ? R->c1 : R->c2;
         out->a = -1;
-        out->b = 2 * fb + (db[fb] < 0);
-        out->separation = sb;
-        out->normal = mk_v3(sj * r[0][fb], sj * r[1][fb], sj * r[2][fb]);
+        out->b = 2 * x.fb + (db < 0);
+        out->separation = x.sb;
+        out->normal = mk_v3_scale(c, sj);
     } else {
-        edge_result(r, d, e.k / 3, e.k % 3, se, out);
+        mk_real r[3][3], d[3];
+        r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
+        r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
+        r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
+        d[0] = t.x, d[1] = t.y, d[2] = t.z;
+        edge_result(r, d, x.k / 3, x.k % 3, x.se, out);
     }
+}
+
+MK_ALWAYS_INLINE void mk_sat_box_box_inl(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_vec3 t, const mk_sat_options *opt, mk_sat_result *out)
+{
+    box_faces f;
+    box_faces_of(ha, hb, R, t, &f);
+    mk_sat_box_box_rest_inl(ha, hb, R, t, &f, opt, out);
 }
 
 #endif

@@ -2347,6 +2347,53 @@ START_TEST(np_far_pairs_drop_points)
 }
 END_TEST
 
+// Two boxes apart by less than the contact breaking threshold report no
+// point (box pairs report touching points only), and once mk_collide has
+// found them so, the face axis that separates them answers the next frames
+// alone for as long as it still separates them: those frames are skipped
+// (no mk_collide), with no point, through small moves of B. Touching, the
+// pair is not skipped and has points; parted beyond the threshold it drops
+// them, and coming back within it, it is skipped again from its second
+// frame there on.
+START_TEST(np_separated_boxes_skipped)
+{
+    mkb::CollisionConfiguration mine;
+    btBoxShape box(btVector3(btScalar(0.5), btScalar(0.7), btScalar(0.4)));
+    btCollisionDispatcher dispatcher(&mine);
+    btCollisionObject oa, ob;
+    oa.setCollisionShape(&box);
+    ob.setCollisionShape(&box);
+    btCollisionObjectWrapper wa0(nullptr, &box, &oa, oa.getWorldTransform(), -1, -1), wb0(nullptr, &box, &ob, ob.getWorldTransform(), -1, -1);
+    btCollisionAlgorithm *algo = dispatcher.findAlgorithm(&wa0, &wb0, nullptr, BT_CONTACT_POINT_ALGORITHMS);
+    const btScalar t = box.getContactBreakingThreshold(gContactBreakingThreshold);
+    // B beside A along x at gap g (a fraction of t; < 0 overlapping), tilted
+    // about x (which keeps its extent along x), and whether it is skipped.
+    const struct { double g, tilt; bool skipped; } frames[] = {
+        {0.5, 0, false}, {0.4, 0.01, true}, {0.2, 0.02, true}, {-0.5, 0, false}, {1.5, 0, false},
+        {1.2, 0, true},  {0.5, 0, false},   {0.3, 0.01, true}, {0.6, 0, true}};
+    btDispatcherInfo info;
+    for (size_t i = 0; i < sizeof frames / sizeof frames[0]; i++) {
+        oa.setWorldTransform(btTransform::getIdentity());
+        ob.setWorldTransform(btTransform(btQuaternion(btVector3(1, 0, 0), (btScalar)frames[i].tilt),
+                                         btVector3(btScalar(1) + (btScalar)frames[i].g * t, 0, 0)));
+        btCollisionObjectWrapper wa(nullptr, &box, &oa, oa.getWorldTransform(), -1, -1), wb(nullptr, &box, &ob, ob.getWorldTransform(), -1, -1);
+        btManifoldResult result(&wa, &wb);
+        const long skips = mine.stats.skipped.load();
+        algo->processCollision(&wa, &wb, info, &result);
+        btManifoldArray manifolds;
+        algo->getAllContactManifolds(manifolds);
+        int points = 0;
+        for (int m = 0; m < manifolds.size(); m++) points += manifolds[m]->getNumContacts();
+        ck_assert_msg((mine.stats.skipped.load() > skips) == frames[i].skipped, "frame %d: skipped %d", (int)i, !frames[i].skipped);
+        if (frames[i].g > 0) ck_assert_msg(points == 0, "frame %d: %d points while apart", (int)i, points);
+        else ck_assert_msg(points > 0, "frame %d: no point while touching", (int)i);
+    }
+    ck_assert_int_eq(mine.stats.collide_errors.load(), 0);
+    algo->~btCollisionAlgorithm();
+    dispatcher.freeCollisionAlgorithm(algo);
+}
+END_TEST
+
 // processCollision of one pair algorithm at each of the poses in turn (a
 // at xa[i], b at xb[i]); the manifold's point count after the last one.
 int collide_in_turn(mkb::CollisionConfiguration *config, btCollisionShape *a, btCollisionShape *b, const btTransform *xa,
@@ -2622,6 +2669,7 @@ Suite *suite()
     TCase *pc = tcase_create("pose_cache");
     tcase_add_test(pc, np_pose_cache_sees_one_ulp);
     tcase_add_test(pc, np_far_pairs_drop_points);
+    tcase_add_test(pc, np_separated_boxes_skipped);
     tcase_add_test(pc, np_box_pairs_skipped_only_when_apart);
     suite_add_tcase(s, pc);
     TCase *c = tcase_create("ccd");
