@@ -38,6 +38,14 @@
  * 10 % faster, but the sparse frames 30-99 no faster (median 0.84-0.96
  * against 0.83-0.92 ms, 3 alternated runs, load 7), for a second,
  * platform-specific form of the test.
+ * Not kept (session 11, ODE's running stress scene from a snapshot of step
+ * 25, steps 25-99, rdtsc per phase, 4-5 alternated runs, load 8-14): the
+ * merge of two rows picking the run that moves with masks instead of a
+ * branch (callgrind's branch model: 1.03 M -> 0.74 M mispredicts over
+ * steps 25-54, with the big boxes' test below also branch-free) measured
+ * no faster (sweep 932-1214 against 964-1145 kcycles per step); the big
+ * boxes' test without a branch adds ~13 instructions per box and saved
+ * little: its branch mispredicted ~1 k times per step.
  *
  * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
  * quantisation, rows; made with headroom) and start from the last sweep's
@@ -50,7 +58,7 @@
  * Cost: O(n) keys, one insertion sort bounded to 4 moves per box (plus a
  * radix sort of the boxes that changed rows, at most about n / 8) or one
  * radix sort of n keys (counted as they are made, two or three scatter
- * passes, the last one writing the sweep's arrays), and for each box the
+ * passes), one pass placing the sorted boxes, and for each box the
  * boxes of its three rows that overlap it on the sweep axis. */
 #include <math.h>
 #include <string.h>
@@ -661,24 +669,25 @@ static int radix_plan(uint32_t *h, const uint64_t *key, int n, keying_ k, int *n
     return m;
 }
 
-/* Stable LSD radix sort of key[0, n) by their sort bits, the last pass
- * placing each box straight into the sweep's arrays (no pass of its own). */
-static void sort_and_place(struct mk_sweep *w, const src_ *v, int n, keying_ k)
+/* Stable LSD radix sort of key[0, n) by their sort bits; returns where
+ * the sorted keys are (key or tmp). The boxes are placed by a pass of
+ * their own, in order: a last scatter pass writing the sweep's arrays
+ * directly (a permuted box, slot, rlo and rhi per key, each store to
+ * another of up to 4096 buckets) missed the cache on every store: in
+ * ODE's running stress scene (steps 25-99, rdtsc, 5 alternated runs, load
+ * 9-11) keys, sort and placing took 747-1154 kcycles per step that way and
+ * 423-597 with the placing pass in order. */
+static const uint64_t *radix_sort(struct mk_sweep *w, int n, keying_ k)
 {
-    const placing_ pl = placing_of(w, v);
     uint64_t *src = w->key, *dst = w->tmp, *sw;
     int need[3], m = radix_plan(w->hist, w->key, n, k, need), p, i;
     for (p = 0; p < m; ++p) {
         int d = need[p];
         uint32_t *c = w->hist + DIGIT_[d].off;
-        if (p == m - 1) {
-            for (i = 0; i < n; ++i) place(&pl, (int)c[digit(src[i], d)]++, src[i]);
-            return;
-        }
         for (i = 0; i < n; ++i) dst[c[digit(src[i], d)]++] = src[i];
         sw = src; src = dst; dst = sw;
     }
-    for (i = 0; i < n; ++i) place(&pl, i, src[i]); /* one bucket: in order already */
+    return src;
 }
 
 /* Boxes beyond the plan's ranges land in row 0 or the last row, at q = 0
@@ -730,11 +739,12 @@ static int sort_keys(struct mk_sweep *w, const src_ *v, int reuse, int *nbig)
         w->age = 0;
     }
     w->age++;
-    if (sorted) {
+    {
+        /* the slot is payload: input order breaks ties */
+        const uint64_t *key = sorted ? w->key : radix_sort(w, n, k);
         const placing_ pl = placing_of(w, v);
-        for (i = 0; i < n; ++i) place(&pl, i, w->key[i]);
-    } else
-        sort_and_place(w, v, n, k); /* the slot is payload: input order breaks ties */
+        for (i = 0; i < n; ++i) place(&pl, i, key[i]);
+    }
     w->rlo[n] = MK_SWEEP_END_;
     w->crowded = crowded(w, n);
     return n;

@@ -83,7 +83,7 @@ struct Fresh {
     const PairContact *c;
     btVector3 local_a, local_b;
     int part0, part1, index0, index1;
-    int slot;  // cached slot it replaces, or -1
+    int slot;  // cached slot with its feature key, or -1
 };
 
 bool same_key(const btManifoldPoint &a, const Fresh &f)
@@ -98,6 +98,20 @@ btScalar anchor_gap2(const btManifoldPoint &a, const Fresh &f) { return (a.m_loc
 void write_point(btManifoldPoint &p, const Material &mat, Tangents *tangents, const Fresh &f)
 {
     fill_point(p, mat, tangents, *f.c, f.local_a, f.local_b, f.part0, f.part1, f.index0, f.index1);
+}
+
+// Slot s takes `f`, keeping its warm-start state (impulses, previous rhs,
+// lifetime, user data), as Bullet's replaceContactPoint; with friction
+// anchors that call itself decides whether the cached point stays.
+void replace_point(btPersistentManifold *m, int s, const Material &mat, Tangents *tangents, const Fresh &f)
+{
+    if (mat.flags & BT_CONTACT_FLAG_FRICTION_ANCHOR) {
+        btManifoldPoint q;
+        write_point(q, mat, tangents, f);
+        m->replaceContactPoint(q, s);
+    } else {
+        write_point(m->getContactPoint(s), mat, tangents, f);
+    }
 }
 
 }  // namespace
@@ -121,12 +135,14 @@ bool write_contacts(btManifoldResult *result, const PairContact *points, int cou
     const btTransform &tb = swapped ? o0->getWorldTransform() : o1->getWorldTransform();
 
     Fresh fresh[MANIFOLD_CACHE_SIZE];
-    bool slot_used[MANIFOLD_CACHE_SIZE] = {false, false, false, false};
+    // owner[s]: the reported point written into slot s this frame, or -1
+    // (a cached point not reported, or a free slot).
+    int owner[MANIFOLD_CACHE_SIZE] = {-1, -1, -1, -1};
     int n = 0;
     for (int i = 0; i < count; i++) {
         const PairContact &c = points[i];
         if (c.distance > threshold) continue;
-        Fresh &f = fresh[n++];
+        Fresh &f = fresh[n];
         f.c = &c;
         f.local_a = ta.invXform(c.point_on_b + c.normal_on_b * c.distance);
         f.local_b = tb.invXform(c.point_on_b);
@@ -141,35 +157,14 @@ bool write_contacts(btManifoldResult *result, const PairContact *points, int cou
         // whose warm start would otherwise push with an impulse from
         // another place (see write_contacts in contact_writer.h).
         for (int s = 0; s < cached; s++) {
-            if (!slot_used[s] && same_key(m->getContactPoint(s), f) &&
+            if (owner[s] < 0 && same_key(m->getContactPoint(s), f) &&
                 anchor_gap2(m->getContactPoint(s), f) < threshold * threshold) {
                 f.slot = s;
-                slot_used[s] = true;
+                owner[s] = n;
                 break;
             }
         }
-    }
-    // A contact whose features changed but which did not move (a corner that
-    // slid past its neighbour's edge turns from vertex-face into edge-edge)
-    // is the same contact for the solver: it takes the nearest unmatched
-    // cached point within Bullet's matching radius (the breaking threshold,
-    // between the anchors on body 0, as getCacheEntry measures). This also
-    // keeps a point kept below from being doubled by its successor.
-    // Measured between the anchors on body 1 instead (bullet_scenes --trials
-    // 7): 3000 boxes drift 49.1 +- 5.9, ke_end 16.2k +- 1.4k against 43.9 +- 4
-    // and 14.1k +- 1k this way (native 42.4 +- 3, 11.1k +- 0.74k).
-    for (int i = 0; i < n; i++) {
-        if (fresh[i].slot >= 0) continue;
-        btScalar best = threshold * threshold;
-        for (int s = 0; s < cached; s++) {
-            if (slot_used[s]) continue;
-            const btScalar d2 = anchor_gap2(m->getContactPoint(s), fresh[i]);
-            if (d2 < best) {
-                best = d2;
-                fresh[i].slot = s;
-            }
-        }
-        if (fresh[i].slot >= 0) slot_used[fresh[i].slot] = true;
+        n++;
     }
 
     const Material mat = material_of(o0, o1);
@@ -177,53 +172,60 @@ bool write_contacts(btManifoldResult *result, const PairContact *points, int cou
     // Matched: rewritten in place, impulses and lifetime carried over (with
     // friction anchors, Bullet's replaceContactPoint decides whether the
     // cached point stays).
-    for (int i = 0; i < n; i++) {
-        if (fresh[i].slot < 0) continue;
-        btManifoldPoint &p = m->getContactPoint(fresh[i].slot);
-        if (mat.flags & BT_CONTACT_FLAG_FRICTION_ANCHOR) {
-            btManifoldPoint q;
-            write_point(q, mat, &tangents, fresh[i]);
-            m->replaceContactPoint(q, fresh[i].slot);
-        } else {
-            write_point(p, mat, &tangents, fresh[i]);
-        }
-    }
-    // New points: appended while there is room, then into the slots of cached
-    // points not reported this frame (fresh warm-start state, user data
-    // released). Unreported points that keep their slot stay, as in Bullet's
-    // own manifolds, until refreshContactPoints (which the algorithm calls
-    // next) finds them separated or slid beyond the threshold: Minko reports
-    // one clipped face, and a hull resting on two nearly coplanar triangles
-    // alternates between them; dropping the other triangle's corner every
-    // frame restarted its impulse and kept the hull rocking.
-    int free_slot = 0;
+    for (int i = 0; i < n; i++)
+        if (fresh[i].slot >= 0) replace_point(m, fresh[i].slot, mat, &tangents, fresh[i]);
+    // The others, in the order given, the way Bullet's addContactPoint sends
+    // a point: onto the manifold point nearest to it (getCacheEntry: between
+    // the anchors on body 0, within the breaking threshold, any slot, one
+    // written this frame too), whose impulses it takes over (a contact whose
+    // features changed but not its place: a corner that slid past an edge
+    // turns from vertex-face into edge-edge); else appended while there is
+    // room, else into the slot Bullet's area rule picks (addManifoldPoint
+    // keeps the deepest point and the largest area), cold. Either way it may
+    // take the slot of a point written this frame, which is then dropped:
+    // Bullet keeps one point per breaking threshold and four per manifold
+    // by these rules, and keeping more measured worse (contact_writer.h).
+    // Session 10 measured the nearest search between the anchors on body 1
+    // instead (bullet_scenes --trials 7): 3000 boxes drift 49.1 +- 5.9,
+    // ke_end 16.2k +- 1.4k against 43.9 +- 4 and 14.1k +- 1k on body 0.
     for (int i = 0; i < n; i++) {
         if (fresh[i].slot >= 0) continue;
-        btManifoldPoint p;
-        write_point(p, mat, &tangents, fresh[i]);
-        if (m->getNumContacts() < MANIFOLD_CACHE_SIZE) {
-            fresh[i].slot = m->addManifoldPoint(p);
-            slot_used[fresh[i].slot] = true;
+        int near = -1;
+        btScalar best = threshold * threshold;
+        for (int s = 0; s < m->getNumContacts(); s++) {
+            const btScalar d2 = anchor_gap2(m->getContactPoint(s), fresh[i]);
+            if (d2 < best) {
+                best = d2;
+                near = s;
+            }
+        }
+        if (near >= 0) {
+            // Two reported points within the threshold are one contact:
+            // the deeper stays, so the deepest point is never lost.
+            if (owner[near] >= 0 && fresh[owner[near]].c->distance <= fresh[i].c->distance) continue;
+            replace_point(m, near, mat, &tangents, fresh[i]);
+            owner[near] = i;
             continue;
         }
-        while (slot_used[free_slot]) free_slot++;  // n <= 4 fresh points: a free slot exists
-        m->clearUserCache(m->getContactPoint(free_slot));
-        m->getContactPoint(free_slot) = p;
-        slot_used[free_slot] = true;
-        fresh[i].slot = free_slot;
+        btManifoldPoint p;
+        write_point(p, mat, &tangents, fresh[i]);
+        owner[m->addManifoldPoint(p)] = i;
     }
 
+    int written = 0;
+    for (int s = 0; s < m->getNumContacts(); s++) written += owner[s] >= 0;
     if (gContactAddedCallback && ((o0->getCollisionFlags() | o1->getCollisionFlags()) &
                                   btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK)) {
         const btCollisionObjectWrapper *a = swapped ? w1 : w0, *b = swapped ? w0 : w1;
-        for (int i = 0; i < n; i++) {
-            btManifoldPoint &p = m->getContactPoint(fresh[i].slot);
+        for (int s = 0; s < m->getNumContacts(); s++) {
+            if (owner[s] < 0) continue;
+            btManifoldPoint &p = m->getContactPoint(s);
             (*gContactAddedCallback)(p, a, p.m_partId0, p.m_index0, b, p.m_partId1, p.m_index1);
         }
     }
     if (gContactStartedCallback && cached == 0 && n > 0) gContactStartedCallback(m);
     // Every point of the manifold written now, none kept from before?
-    return n == m->getNumContacts() && n > 0;
+    return written == m->getNumContacts() && written > 0;
 }
 
 void add_contacts(btManifoldResult *result, const PairContact *points, int count, bool keys)

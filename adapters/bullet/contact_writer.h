@@ -26,27 +26,62 @@
 // friction / restitution / rolling / spinning friction and contact
 // stiffness-damping through Bullet's gCalculateCombined*Callback hooks,
 // friction anchors, btPlaneSpace1 friction directions, gContactAddedCallback
-// (with CF_CUSTOM_MATERIAL_CALLBACK) and gContactStartedCallback. A point
-// whose features changed but not its place (within the breaking threshold of
-// a cached point that matched nothing, as Bullet's getCacheEntry) keeps that
-// point's impulses. New points start with zero impulses, appended while the
-// manifold has room, then in the slots of cached points not reported this
-// frame; cached points that keep their slot stay, as in Bullet's own
-// manifolds, for the caller's refreshContactPoints to drop once they
-// separate or slide beyond the threshold.
+// (with CF_CUSTOM_MATERIAL_CALLBACK) and gContactStartedCallback.
 //
-// Not kept (session 10, demos/bullet_scenes --scene 3000_boxes --trials 7,
-// ke_end mean +- sd; native 11.1k +- 0.74k, this writer 14.1k +- 0.56k,
-// max_pen 0.913 +- 0.046 against native's 1.44 +- 0.17): every box point
-// through addContactPoint, Bullet's nearest-point matching and area-rule
-// eviction (no feature keys, which the issue asks for) 11.7k +- 1.0k with
-// max_pen 1.37 +- 0.19 and native's point count (8.39k a step against
-// 8.99k); feature matching with new points evicting by Bullet's area rule
-// when the manifold is full 12.6k +- 0.96k (max_pen 1.10); nearest position
-// instead of features first 15.0k +- 0.88k; Bullet's refreshContactPoints
-// every frame 13.8k +- 0.73k. So about half of the gap is the eviction
-// rule, the rest Bullet's non-exclusive nearest matching (two new points
-// near one cached point share its slot), which keeps fewer points.
+// Which points the manifold keeps is Bullet's rule with features first.
+// A reported point keyed to a cached one (the same features, within the
+// radius above) is rewritten in its slot, impulses carried over. Every
+// other point, in the order given, goes where Bullet's addContactPoint
+// would send it: onto the manifold point nearest to it within the breaking
+// threshold (getCacheEntry), whose impulses it takes over (a contact whose
+// features changed but not its place), else appended while there is room,
+// else into the slot Bullet's area rule picks (addManifoldPoint: it keeps
+// the deepest point and the largest area), cold. Either may take the slot
+// of a point written this frame, which is then dropped: two reported points
+// within the threshold are one contact (the deeper stays, so the deepest
+// point is never lost; Bullet keeps the later one), and a fifth point
+// costs one of the four. Cached points not reported stay until the
+// caller's refreshContactPoints finds them separated or slid beyond the
+// threshold, as in Bullet's own manifolds (Minko reports one clipped face,
+// and a hull resting on two nearly coplanar triangles alternates between
+// them; dropping the other triangle's corner every frame restarted its
+// impulse and kept the hull rocking). Cost: one nearest search over at most
+// four slots for each point without a key match.
+//
+// Measured (session 11, demos/bullet_scenes --scene 3000_boxes --trials 7
+// --backend minko, helper, load 5-12, mean +- sd; native ke_end 11.1k +-
+// 0.74k, drift 42.4 +- 3, fell 1070 +- 23, max_pen 1.44 +- 0.17): this rule
+// 11.8k +- 0.80k, drift 42.6 +- 5.8, fell 1070 +- 25, max_pen 1.35 +- 0.18
+// (all 'noise'); the session-10 writer (new points into the slots of
+// unreported points first, never onto a point written this frame) 14.1k
+// +- 0.56k, drift 49 +- 7.5, fell 1090 +- 15 (all 'worse'), max_pen 0.913
+// +- 0.046 ('better'). Keeping every reported point kept more points and
+// more energy in the pile (and max_pen low); native's point economy is
+// what damps it. The price: on mass_ratio 1:1000 the session-10 writer
+// held the heavy box (max_pen 0.725 +- 0.038, end_pen 5e-7) where native
+// sinks in some trials (0.884 +- 0.14, 0.52 +- 0.49); this rule is
+// native's (0.984 +- 0.071, 0.41 +- 0.52, 'noise'); the area rule's
+// eviction of a reported point is what changes it (below).
+// Not kept (same command): the later point staying on a merge (Bullet's
+// choice) 11.7k +- 0.95k, which loses the deeper point when it comes first
+// (test np_conventions_match_bullet, hull-plane); the earlier one staying
+// 12.2k +- 0.65k ('worse'); the merge alone (session-10 eviction) 14.5k +-
+// 1.3k; an area rule among the unreported slots only (every reported point
+// kept) 13.7k +- 0.61k with max_pen 0.90 -- it keeps the 1:1000 advantage
+// (0.734 +- 0.054, end_pen 5e-7), as the merge alone does. The 1:1000
+// collapse and the pile's damping both follow Bullet's own area formula
+// (sortCachedPoints: one fixed pairing of the corners, the deepest cached
+// point kept even when not reported): with the true quadrilateral area
+// (the largest cross product of its three pairings) over every slot, the
+// 1:1000 slab holds (max_pen 0.723 +- 0.04 keeping the deepest reported
+// point, 0.773 +- 0.054 keeping the deepest of all) but the pile keeps its
+// energy: 13.7k +- 1.1k, max_pen 0.91 +- 0.066, and 12.6k +- 1.3k, max_pen
+// 1.21 +- 0.087 ('worse'). No rule measured so far has both.
+//
+// Not kept (session 10, same command, ke_end): every box point through
+// addContactPoint (no feature keys, which the issue asks for) 11.7k +- 1.0k
+// with max_pen 1.37 +- 0.19; nearest position instead of features first
+// 15.0k +- 0.88k; Bullet's refreshContactPoints every frame 13.8k +- 0.73k.
 #ifndef MINKO_BULLET_CONTACT_WRITER_H
 #define MINKO_BULLET_CONTACT_WRITER_H
 

@@ -42,6 +42,12 @@
  * replay frames 0-2, 5.3 M pairs) but 4-10 % slower on the replay's
  * frames 0-11 and 30-99 (3 alternated runs, load 6-8): the loop waits on
  * memory (records, geoms, the callback's stores), not on instructions.
+ * Not kept (session 11): prefetching each body's position with the walk
+ * (dxSphere::computeAABB waits on it: ~11-16 % of the space collide's
+ * samples in the running stress scene, perf) measured no faster under
+ * load 8-14 (sync 949-1393 against 941-1573 kcycles per step, 3-6
+ * alternated runs), nor did longer prefetch distances (walk 16, records
+ * 48, geoms 24 pairs ahead).
  *
  * Pair order: the sweep's, fixed by the calls made so far; within a pair,
  * the geom this space's records met first comes first (a first-seen index
