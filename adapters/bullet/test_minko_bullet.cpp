@@ -2667,6 +2667,7 @@ Suite *suite()
     tcase_add_test(n, np_hull_on_box_one_point_like_bullet);
     suite_add_tcase(s, n);
     TCase *pc = tcase_create("pose_cache");
+    tcase_set_timeout(pc, 60); /* 16 shape pairs x two worlds per test: ~1.5 s under SAN at load 8, near Check's default 4 s when forking */
     tcase_add_test(pc, np_pose_cache_sees_one_ulp);
     tcase_add_test(pc, np_far_pairs_drop_points);
     tcase_add_test(pc, np_separated_boxes_skipped);
