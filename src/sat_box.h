@@ -174,6 +174,15 @@ MK_ALWAYS_INLINE mk_real box_face_best(mk_vec3 s, int *at)
     return best;
 }
 
+/* R as plain scalars: r[i][j] is row i, column j (column j = B's axis j in
+ * A's frame). */
+MK_ALWAYS_INLINE void box_rows(const mk_mat3 *R, mk_real r[3][3])
+{
+    r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
+    r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
+    r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
+}
+
 /* The raw answer of the 15 axes: the best face of A (fa, separation sa),
  * of B (fb, sb) and edge pair (k = 3 i + j, se; -1, -MK_REAL_MAX: none or
  * not tested), and whether the search stopped early. */
@@ -193,9 +202,7 @@ MK_ALWAYS_INLINE void box_sat_axes(mk_vec3 ha, mk_vec3 hb, const mk_mat3 *R, mk_
 {
     mk_real r[3][3], ar[3][3], a[3], b[3], d[3];
     box_edges e;
-    r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
-    r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
-    r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
+    box_rows(R, r);
     /* Spelled out, as every index below: constant indices let the compiler
      * keep the entries as scalars (a loop here kept r and ar in memory and
      * reloaded rows of r in 16-byte halves its 8-byte stores could not
@@ -264,9 +271,7 @@ MK_ALWAYS_INLINE void mk_sat_box_box_rest_inl(mk_vec3 ha, mk_vec3 hb, const mk_m
         out->normal = mk_v3_scale(c, sj);
     } else {
         mk_real r[3][3], d[3];
-        r[0][0] = R->c0.x, r[1][0] = R->c0.y, r[2][0] = R->c0.z;
-        r[0][1] = R->c1.x, r[1][1] = R->c1.y, r[2][1] = R->c1.z;
-        r[0][2] = R->c2.x, r[1][2] = R->c2.y, r[2][2] = R->c2.z;
+        box_rows(R, r);
         d[0] = t.x, d[1] = t.y, d[2] = t.z;
         edge_result(r, d, x.k / 3, x.k % 3, x.se, out);
     }
