@@ -16,12 +16,16 @@
  * little more, so rounding cannot hide a pair), so a box's partners start in
  * its own row or the next one up or down. Each box becomes one 64-bit key
  * (row, its lower end on the sweep axis quantised to 16 bits, slot) and one
- * radix sort orders them; each row is swept alone and then against the row
- * above. The inner loops read row << 16 | q, so one compare ends a scan
- * at the box's end or at its row's end. The quantisation is monotone, so
- * comparing quantised values never stops a sweep before a box it should
- * have met; the exact closed test on the AABBs decides. Boxes infinite on the row axis (ground planes)
- * do not fit a row: they are tested against every box, O(n) each.
+ * radix sort orders them. Each box then scans the rest of its row, and the
+ * row above from the first box starting at most wq before it (wq: the
+ * widest box on the sweep axis, from a sample, unless that is over twice
+ * the mean); the few boxes wider than wq scan the row below themselves
+ * (sweep_rows, sweep_wide). The inner loops read row << 16 | q, so one
+ * compare ends a scan at the box's end or at its row's end. The
+ * quantisation is monotone, so comparing quantised values never stops a
+ * sweep before a box it should have met; the exact closed test on the
+ * AABBs decides. Boxes infinite on the row axis (ground planes) do not
+ * fit a row: they are tested against every box, O(n) each.
  *
  * Without a branch on the test: in a dense heap about a third of the
  * tested pairs overlap, at random, and a branch per axis mispredicted on
@@ -46,6 +50,29 @@
  * no faster (sweep 932-1214 against 964-1145 kcycles per step); the big
  * boxes' test without a branch adds ~13 instructions per box and saved
  * little: its branch mispredicted ~1 k times per step.
+ * Session 12 (the same steps 25-99, the boxes of each mk_bp_sweep_boxes
+ * call recorded and replayed alone, 5 repetitions, medians over 7
+ * alternated runs, load 6-11): the look back instead of merging two rows
+ * (the merge's choice mispredicted about every other box), the first box
+ * of each scan tested without asking, and a half-space (ODE's ground
+ * plane, one finite side) tested on that side alone without a branch
+ * (with broadphase.c's cheaper box check) took the median call from
+ * ~600-640 to ~550 us, though callgrind counts ~4 % more instructions
+ * (3.61 -> 3.76 M per call) for 2.4 times fewer mispredicts in its branch
+ * model (27.2 k -> 11.2 k per call). bench_broadphase's 10k scenes, SAP
+ * sets (callgrind per update): uniform 14.4 -> 13.1 M, mixed 23.3 ->
+ * 22.0 M, corridor 4.67 -> 4.57 M, wall 4.44 -> 4.40 M, teleport 14.5 ->
+ * 13.2 M.
+ * Not kept (session 12, same replay): the merge kept with the first box
+ * tested without asking (328 M instructions over the 75 calls against
+ * 286 M, no faster than the merge); a second box tested without asking,
+ * or a third unasked step of the look back's start (no faster).
+ * Why the insertion sort below is never taken there: the heap spreads
+ * outwards ~0.25 m a step on each axis with rows 0.6 m tall, so ~40 % of
+ * the boxes change rows every step (only ~255 inversions within rows).
+ * Letting it run up to two movers per stayer (their radix sort merged in)
+ * measured worse: 300 M against 292 M instructions over the 75 calls,
+ * 1.21 M against 0.84 M mispredicts, median 682 against 593 us.
  *
  * Sweeps in a row (a pairs_only caller's busy frames) keep the plan (axes,
  * quantisation, rows; made with headroom) and start from the last sweep's
@@ -58,8 +85,10 @@
  * Cost: O(n) keys, one insertion sort bounded to 4 moves per box (plus a
  * radix sort of the boxes that changed rows, at most about n / 8) or one
  * radix sort of n keys (counted as they are made, two or three scatter
- * passes), one pass placing the sorted boxes, and for each box the
- * boxes of its three rows that overlap it on the sweep axis. */
+ * passes), one pass placing the sorted boxes, and for each box the boxes
+ * of its own row that start within it and of the row above that start
+ * within it or up to wq before it; for each box wider than wq, a binary
+ * search and the boxes of the row below that start within it. */
 #include <math.h>
 #include <string.h>
 
@@ -85,6 +114,7 @@ typedef struct frame_ {
     double x0, xscale;    /* q(x) = floor((x - x0) * xscale), clamped */
     double y0, inv_h;     /* row(y) = floor((y - y0) * inv_h), clamped */
     double h;             /* row height: at least every box's extent on ay */
+    uint32_t wq;          /* a box starts at most wq before the boxes of the row above it scans (in q) */
 } frame_;
 
 struct mk_sweep {
@@ -94,6 +124,7 @@ struct mk_sweep {
     uint32_t *slot;       /* per sorted box: its slot */
     mk_aabb *box;         /* per sorted box: its AABB (sequential reads in the sweep) */
     uint32_t *big;        /* slots of boxes infinite on the row axis */
+    uint32_t *wide;       /* sorted indices of the boxes wider than f.wq on the sweep axis */
     int cap;
     frame_ f;             /* of the last sweep, with its n sorted and nbig big boxes: */
     int n, nbig;          /* region queries after a stateless update read them */
@@ -113,10 +144,11 @@ enum { KEPT_NONE = 0, KEPT_PROXIES, KEPT_BOXES };
 /* The first size of the array of pairs a box sweep hands out. */
 #define MK_SWEEP_OUT_ 1024
 
-/* The per-box arrays of a sweep of capacity n (rlo has n + 1 entries). */
+/* The per-box arrays of a sweep of capacity n (box, slot and wide have one
+ * entry more, rlo two: sentinels for scans that test a box unasked). */
 static size_t sweep_bytes(size_t n)
 {
-    return n * (2 * sizeof(uint64_t) + 4 * sizeof(uint32_t) + sizeof(mk_aabb)) + sizeof(uint32_t);
+    return n * (2 * sizeof(uint64_t) + 5 * sizeof(uint32_t) + sizeof(mk_aabb)) + 4 * sizeof(uint32_t) + sizeof(mk_aabb);
 }
 
 static mk_status sweep_create(mk_bp *bp)
@@ -130,12 +162,13 @@ static mk_status sweep_create(mk_bp *bp)
         mk_bp_free_(bp, w, sizeof *w);
         return MK_ERR_OUT_OF_MEMORY;
     }
-    w->box = (mk_aabb *)p; p += n * sizeof(mk_aabb);
+    w->box = (mk_aabb *)p; p += (n + 1) * sizeof(mk_aabb);
     w->key = (uint64_t *)p; p += n * sizeof(uint64_t);
     w->tmp = (uint64_t *)p; p += n * sizeof(uint64_t);
-    w->rlo = (uint32_t *)p; p += (n + 1) * sizeof(uint32_t);
+    w->rlo = (uint32_t *)p; p += (n + 2) * sizeof(uint32_t);
     w->rhi = (uint32_t *)p; p += n * sizeof(uint32_t);
-    w->slot = (uint32_t *)p; p += n * sizeof(uint32_t);
+    w->slot = (uint32_t *)p; p += (n + 1) * sizeof(uint32_t);
+    w->wide = (uint32_t *)p; p += (n + 1) * sizeof(uint32_t);
     w->big = (uint32_t *)p;
     w->cap = bp->cap;
     w->n = w->nbig = w->kept = w->age = w->crowded = w->sort_wait = w->sort_backoff = 0;
@@ -204,6 +237,9 @@ static inline mk_aabb permuted(const frame_ *f, const mk_aabb *b)
     r.hi = mk_v3(hi[f->ay], hi[f->az], hi[f->ax]);
     return r;
 }
+
+/* Infinite on the row axis: in no row. */
+static int is_big(const frame_ *f, const mk_aabb *b) { return !(hi_of(b, f->ay) - lo_of(b, f->ay) <= MK_REAL_MAX); }
 
 /* Monotone in x, so q(lo_b) > q(hi_a) implies lo_b > hi_a. */
 static uint32_t quantise(const frame_ *f, double x)
@@ -276,7 +312,36 @@ static void widen(double *lo, double *hi)
     *hi += m;
 }
 
-static void plan(const src_ *v, frame_ *f)
+/* The rows' look back, wq (see sweep_rows), from the quantised widths of
+ * a sample of the boxes: each box pays about per_q * (wq - its width) tests
+ * of boxes that start within wq before it but end before it (per_q boxes
+ * per unit of q in a row), and each box wider than wq a scan of its own,
+ * counted as 4 tests (2 let ODE's denser early heap make a fifth of its
+ * boxes wide: +0.6 % instructions, +6 % mispredicts in callgrind); wq is
+ * the sampled width with the least expected
+ * cost. Boxes of one size: the widest (no waste, no wide box); ODE's
+ * spread heap (sizes 1:6, sparse rows): the widest; sizes 1:100 in crowded
+ * rows: smaller (wq = 0 would test the merge's pairs). O(m) (a radix
+ * sort) for m <= ~1024 sampled boxes, once per plan. */
+static uint32_t look_back(const src_ *v, const frame_ *f, double per_q, uint64_t *wbuf, uint64_t *scratch)
+{
+    uint32_t s, stride = v->n / MK_SWEEP_SAMPLE_ + 1, best = 0;
+    double sum = 0, cost, least = HUGE_VAL;
+    int m = 0, i;
+    for (s = 0; s < v->n; s += stride) {
+        const mk_aabb *b = src_box(v, s);
+        if (src_in(v, s) && !is_big(f, b)) wbuf[m++] = quantise(f, hi_of(b, f->ax)) - quantise(f, lo_of(b, f->ax));
+    }
+    mk_sort_u64_by_(wbuf, scratch, m, 0);
+    for (i = 0; i < m; ++i) {
+        sum += (double)wbuf[i];
+        cost = per_q * ((double)(i + 1) * (double)wbuf[i] - sum) + 4.0 * (m - 1 - i);
+        if (cost < least) { least = cost; best = (uint32_t)wbuf[i]; }
+    }
+    return best;
+}
+
+static void plan(const src_ *v, frame_ *f, uint64_t *wbuf, uint64_t *scratch)
 {
     spread_ p;
     double var[3], xlo, xhi, ylo, yhi, hmax;
@@ -305,6 +370,12 @@ static void plan(const src_ *v, frame_ *f)
     f->h = hmax;
     f->inv_h = hmax > 0 ? 1.0 / hmax : 0;
     if (!(f->inv_h <= 1e300)) f->inv_h = 0; /* a subnormal height: one row */
+    /* boxes per unit of q in one row, from the sampled ranges */
+    {
+        double area = (p.hi[f->ay] - p.lo[f->ay] + hmax) * (p.hi[f->ax] - p.lo[f->ax]) * f->xscale;
+        double per_q = area > 0 && area <= 1e300 ? (double)v->n * hmax / area : 0;
+        f->wq = look_back(v, f, per_q, wbuf, scratch);
+    }
 }
 
 typedef mk_status (*report_fn)(mk_bp *bp, uint32_t a, uint32_t b);
@@ -368,79 +439,126 @@ static inline int overlaps(const mk_aabb *a, const mk_aabb *b)
            (a->lo.z <= b->hi.z) & (b->lo.z <= a->hi.z);
 }
 
-/* Sorted box x against the sorted boxes from j on while their rlo is at
- * most hi (x's end on the sweep axis, moved to the row scanned), the pair
- * passed as (x, j) or, with !x_first, (j, x). Into w->out (no report, no
- * statics) each tested pair is written whatever the test says and kept by
- * moving the end past it: no branch on the test. */
-static MK_INLINE mk_status scan(sweep_ctx_ *c, const rows_ r, int x, int j, uint32_t hi, int x_first)
+/* One tested pair into w->out at *at, kept (*at moved past it) if hit:
+ * no branch on the test. The array grows, at its end, only for a pair
+ * kept. */
+static MK_INLINE mk_status put(sweep_ctx_ *c, mk_bp_pair **at, mk_bp_pair **end, uint32_t sa, uint32_t sb, int hit)
 {
-    mk_aabb a;
-    uint32_t sa;
-    mk_bp_pair *at, *end;
     mk_status st;
-    if (r.rlo[j] > hi) return MK_OK; /* most scans of a sparse scene: set nothing up */
-    a = r.box[x];
-    sa = r.slot[x];
-    if (c->report || c->statics) {
+    if (*at == *end) {
+        if (!hit) return MK_OK;
+        c->at = *at;
+        if ((st = grow_out(c)) != MK_OK) return st;
+        *at = c->at;
+        *end = c->end;
+    }
+    (*at)->a = sa < sb ? sa : sb;
+    (*at)->b = sa < sb ? sb : sa;
+    *at += hit;
+    return MK_OK;
+}
+
+/* Box a (slot sa) against the sorted boxes from j on while their rlo is
+ * at most hi (a's end on the sweep axis, moved to the row scanned; a row's
+ * end or the sentinel stops it). With `fast` (no report, no statics: the
+ * pairs go to w->out at *at) the first box is tested without asking (most
+ * scans of a sparse scene meet none or one, and asking mispredicts), the
+ * others in a loop; rlo[j + 1] >= rlo[j] (the second sentinel) ends it. */
+static MK_INLINE mk_status scan(sweep_ctx_ *c, const rows_ r, const mk_aabb *a, uint32_t sa, int j, uint32_t hi,
+                                mk_bp_pair **at, mk_bp_pair **end, int fast)
+{
+    mk_status st;
+    if (!fast) {
         for (; r.rlo[j] <= hi; ++j)
-            if (mk_bp_overlap_(&a, &r.box[j]) &&
-                (st = x_first ? emit(c, sa, r.slot[j]) : emit(c, r.slot[j], sa)) != MK_OK)
-                return st;
+            if (mk_bp_overlap_(a, &r.box[j]) && (st = emit(c, sa, r.slot[j])) != MK_OK) return st;
         return MK_OK;
     }
-    at = c->at;
-    end = c->end;
-    for (; r.rlo[j] <= hi; ++j) {
-        const uint32_t sb = r.slot[j];
+    if ((st = put(c, at, end, sa, r.slot[j], (r.rlo[j] <= hi) & overlaps(a, &r.box[j]))) != MK_OK) return st;
+    for (++j; r.rlo[j] <= hi; ++j)
+        if ((st = put(c, at, end, sa, r.slot[j], overlaps(a, &r.box[j]))) != MK_OK) return st;
+    return MK_OK;
+}
+
+/* Pairs inside row [s, e) and between it and the row above, [e, u) (none
+ * when u == e): each box scans the rest of its row, and the row above from
+ * the first box starting at most wq before it; then each box of the row
+ * above wider than wq (w->wide from *wi on) scans this row from the first
+ * box starting over wq after it. A pair across the rows is tested once:
+ * by the lower box if the upper one starts at most wq before it, else by
+ * the upper one, which then reaches over wq. Both starts only move
+ * forward, the look back's mostly by 0 to 2 boxes: two steps without a
+ * branch. With wq = 0 the tests are the merge's of the two rows; a larger
+ * wq spares the wide boxes' scans for tests of boxes that start within wq
+ * but end before (see look_back).
+ * Not a merge of the two rows any more (session 12): choosing the run that
+ * moves mispredicted about every other box (see the header). */
+static MK_INLINE mk_status sweep_rows(sweep_ctx_ *c, int s, int e, int u, int *wi, int fast)
+{
+    const rows_ r = rows_of(c->w);
+    const uint32_t wq = c->w->f.wq, back = MK_SWEEP_ROW_ - wq, *wide = c->w->wide;
+    mk_bp_pair *at = c->at, *end = c->end;
+    int i, p = e, q = s;
+    mk_status st = MK_OK;
+    for (i = s; i < e; ++i) {
+        const uint32_t from = r.rlo[i] + back, hi = r.rhi[i], sa = r.slot[i];
+        const mk_aabb a = r.box[i];
+        if ((st = scan(c, r, &a, sa, i + 1, hi, &at, &end, fast)) != MK_OK) goto out;
+        if (u == e) continue;
+        p += r.rlo[p] < from;
+        p += r.rlo[p] < from;
+        while (r.rlo[p] < from) ++p;
+        if ((st = scan(c, r, &a, sa, p, hi + MK_SWEEP_ROW_, &at, &end, fast)) != MK_OK) goto out;
+    }
+    while ((int)wide[*wi] < e) ++*wi; /* wide boxes with no row below, or of this row */
+    for (; (int)wide[*wi] < u; ++*wi) {
+        const int k = (int)wide[*wi];
+        /* the row below's boxes starting at most wq after k (q(lo) + wq past the row: all of them) */
+        const uint32_t lo = r.rlo[k] - MK_SWEEP_ROW_, last = (r.rlo[k] & MK_SWEEP_Q_MAX_) + wq > MK_SWEEP_Q_MAX_ ? lo | MK_SWEEP_Q_MAX_ : lo + wq;
+        const mk_aabb a = r.box[k];
+        while (r.rlo[q] <= last) ++q;
+        if ((st = scan(c, r, &a, r.slot[k], q, r.rhi[k] - MK_SWEEP_ROW_, &at, &end, fast)) != MK_OK) goto out;
+    }
+out:
+    if (fast) c->at = at; /* else emit moved c->at */
+    return st;
+}
+
+/* Sorted boxes [0, n) against one big box pa (slot a): into w->out (no
+ * report, no statics) without a branch on the test, each box's pair
+ * written and kept by moving the end past it, as in scan: a ground plane
+ * of ODE's heap overlaps a third of the boxes, in no order a branch could
+ * learn. Only the big box's finite sides can fail, and a half-space (one
+ * finite side: an axis-aligned plane) is tested on that side alone, as
+ * s * (the box's coordinate) <= bound, s = -1 for a lower side. */
+static mk_status big_all(sweep_ctx_ *c, const mk_aabb *pa, uint32_t a, int n)
+{
+    const mk_aabb *box = c->w->box;
+    const uint32_t *slot = c->w->slot;
+    const mk_real *plo = &pa->lo.x, *phi = &pa->hi.x;
+    mk_bp_pair *at = c->at, *end = c->end;
+    mk_real s = 1, bound = 0;
+    int j, k, off = 0, sides = 0;
+    mk_status st;
+    for (k = 0; k < 3; ++k) {
+        if (plo[k] >= -MK_REAL_MAX) { sides++; off = 3 + k; s = -1; bound = -plo[k]; } /* the box's hi[k] */
+        if (phi[k] <= MK_REAL_MAX) { sides++; off = k; s = 1; bound = phi[k]; }       /* the box's lo[k] */
+    }
+    for (j = 0; j < n; ++j) {
+        const uint32_t sb = slot[j];
+        const int hit = sides == 1 ? s * (&box[j].lo.x)[off] <= bound : overlaps(pa, &box[j]);
         if (at == end) { /* full: grown only for a pair that overlaps */
-            if (!overlaps(&a, &r.box[j])) continue;
+            if (!hit) continue;
             c->at = at;
             if ((st = grow_out(c)) != MK_OK) return st;
             at = c->at;
             end = c->end;
         }
-        at->a = sa < sb ? sa : sb;
-        at->b = sa < sb ? sb : sa;
-        at += overlaps(&a, &r.box[j]);
+        at->a = a < sb ? a : sb;
+        at->b = a < sb ? sb : a;
+        at += hit;
     }
     c->at = at;
     return MK_OK;
-}
-
-/* Pairs inside one row [s, e): rhi[i] is below the next row's rlo values
- * (and the sentinel), so the scan needs no index bound. */
-static mk_status sweep_row(sweep_ctx_ *c, int s, int e)
-{
-    const rows_ r = rows_of(c->w);
-    int i;
-    mk_status st;
-    for (i = s; i < e; ++i)
-        if ((st = scan(c, r, i, i + 1, r.rhi[i], 1)) != MK_OK) return st;
-    return MK_OK;
-}
-
-/* Pairs between row [s, e) and the row above, [t, u): a merge of the two
- * sorted runs; whichever box starts first scans the other run for the
- * boxes starting before it ends (its rhi moved to that row, which ends the
- * scan at the run's end too). The two starts compared are kept in
- * registers (ls moved to the upper row), each step reloading one. */
-static mk_status sweep_rows(sweep_ctx_ *c, int s, int e, int t, int u)
-{
-    const rows_ r = rows_of(c->w);
-    uint32_t ls = r.rlo[s] + MK_SWEEP_ROW_, lt = r.rlo[t];
-    mk_status st;
-    for (;;) {
-        if (ls <= lt) {
-            if ((st = scan(c, r, s, t, r.rhi[s] + MK_SWEEP_ROW_, 1)) != MK_OK) return st;
-            if (++s == e) return MK_OK;
-            ls = r.rlo[s] + MK_SWEEP_ROW_;
-        } else {
-            if ((st = scan(c, r, t, s, r.rhi[t] - MK_SWEEP_ROW_, 0)) != MK_OK) return st;
-            if (++t == u) return MK_OK;
-            lt = r.rlo[t];
-        }
-    }
 }
 
 /* Boxes infinite on the row axis against everything: O(n) each. */
@@ -453,8 +571,12 @@ static mk_status sweep_big(sweep_ctx_ *c, int n, int nbig)
         uint32_t a = w->big[i];
         const mk_aabb *ba = src_box(c->v, a);
         const mk_aabb pa = permuted(&w->f, ba);
-        for (j = 0; j < n; ++j)
-            if (mk_bp_overlap_(&pa, &w->box[j]) && (st = emit(c, a, w->slot[j])) != MK_OK) return st;
+        if (!c->report && !c->statics) {
+            if ((st = big_all(c, &pa, a, n)) != MK_OK) return st;
+        } else {
+            for (j = 0; j < n; ++j)
+                if (mk_bp_overlap_(&pa, &w->box[j]) && (st = emit(c, a, w->slot[j])) != MK_OK) return st;
+        }
         for (j = i + 1; j < nbig; ++j)
             if (mk_bp_overlap_(ba, src_box(c->v, w->big[j])) && (st = emit(c, a, w->big[j])) != MK_OK) return st;
     }
@@ -463,7 +585,6 @@ static mk_status sweep_big(sweep_ctx_ *c, int n, int nbig)
 
 /* ---- keys ---- */
 
-static int is_big(const frame_ *f, const mk_aabb *b) { return !(hi_of(b, f->ay) - lo_of(b, f->ay) <= MK_REAL_MAX); }
 
 /* The digits of the radix sort: shift in the key, size, offset in hist. */
 static const struct { int shift; uint32_t size, off; } DIGIT_[3] = {{24, 4096, 0}, {36, 4096, 4096}, {48, 256, 8192}};
@@ -733,7 +854,7 @@ static int sort_keys(struct mk_sweep *w, const src_ *v, int reuse, int *nbig)
         n = keys_by_slot(w, v, nbig, &k);
     }
     if (!keep || k.tall) {
-        plan(v, f);
+        plan(v, f, w->tmp, w->key); /* both free until the keys are made */
         k.tall = 0;
         n = keys_by_slot(w, v, nbig, &k);
         w->age = 0;
@@ -743,9 +864,19 @@ static int sort_keys(struct mk_sweep *w, const src_ *v, int reuse, int *nbig)
         /* the slot is payload: input order breaks ties */
         const uint64_t *key = sorted ? w->key : radix_sort(w, n, k);
         const placing_ pl = placing_of(w, v);
-        for (i = 0; i < n; ++i) place(&pl, i, key[i]);
+        uint32_t *wide = w->wide, wq = f->wq;
+        int nw = 0;
+        for (i = 0; i < n; ++i) {
+            place(&pl, i, key[i]);
+            wide[nw] = (uint32_t)i;
+            nw += pl.rhi[i] - pl.rlo[i] > wq;
+        }
+        wide[nw] = (uint32_t)n + 1; /* ends the walks over them */
     }
-    w->rlo[n] = MK_SWEEP_END_;
+    /* what scans read past the last box: never a pair */
+    w->rlo[n] = w->rlo[n + 1] = MK_SWEEP_END_;
+    memset(&w->box[n], 0, sizeof w->box[n]);
+    w->slot[n] = 0;
     w->crowded = crowded(w, n);
     return n;
 }
@@ -763,19 +894,49 @@ static int row_end(const struct mk_sweep *w, int i, int n)
     return i;
 }
 
-/* The pairs of the sorted boxes: each row alone and with the next one,
- * then the big boxes. */
-static mk_status sweep_all(sweep_ctx_ *c, int n, int nbig)
+/* First index in [i, e) whose rlo is above q (or, with strict = 0, at
+ * least q): the sorted run [i, e) of one row, q in that row. */
+static int first_above(const struct mk_sweep *w, int i, int e, uint32_t q, int strict)
+{
+    while (i < e) {
+        int mid = i + (e - i) / 2;
+        uint32_t v = w->rlo[mid];
+        if (strict ? v <= q : v < q) i = mid + 1;
+        else e = mid;
+    }
+    return i;
+}
+
+/* First sorted index in [i, n) whose row is at least `row`. */
+static int row_start(const struct mk_sweep *w, int i, uint32_t row)
+{
+    int hi = w->n;
+    while (i < hi) {
+        int mid = i + (hi - i) / 2;
+        if (row_at(w, mid) < row) i = mid + 1;
+        else hi = mid;
+    }
+    return i;
+}
+
+/* Each row alone and with the next one. */
+static MK_INLINE mk_status sweep_grid(sweep_ctx_ *c, int n, int fast)
 {
     const struct mk_sweep *w = c->w;
-    int s, e, u;
+    int s, e, u, wi = 0;
     mk_status st;
     for (s = 0, e = row_end(w, 0, n); s < n; s = e, e = u) {
         u = row_end(w, e, n);
-        if ((st = sweep_row(c, s, e)) != MK_OK) return st;
-        if (e < n && row_at(w, e) == row_at(w, s) + 1 && (st = sweep_rows(c, s, e, e, u)) != MK_OK) return st;
+        if ((st = sweep_rows(c, s, e, e < n && row_at(w, e) == row_at(w, s) + 1 ? u : e, &wi, fast)) != MK_OK) return st;
     }
-    return sweep_big(c, n, nbig);
+    return MK_OK;
+}
+
+/* The pairs of the sorted boxes, then the big boxes. */
+static mk_status sweep_all(sweep_ctx_ *c, int n, int nbig)
+{
+    mk_status st = !c->report && !c->statics ? sweep_grid(c, n, 1) : sweep_grid(c, n, 0);
+    return st != MK_OK ? st : sweep_big(c, n, nbig);
 }
 
 /* One sweep of the source's boxes, kept (KEPT_*) for the next sweep of the
@@ -851,23 +1012,10 @@ mk_status mk_sweep_boxes_(mk_bp *bp, const mk_aabb *boxes, size_t stride, int n,
     return MK_OK;
 }
 
-/* First index in [i, e) whose rlo is above q (or, with strict = 0, at
- * least q): the sorted run [i, e) of one row, q in that row. */
-static int first_above(const struct mk_sweep *w, int i, int e, uint32_t q, int strict)
-{
-    while (i < e) {
-        int mid = i + (e - i) / 2;
-        uint32_t v = w->rlo[mid];
-        if (strict ? v <= q : v < q) i = mid + 1;
-        else e = mid;
-    }
-    return i;
-}
-
 /* The AABB tests a sweep of the current boxes would make, counted without
  * making them: one sort, then per box a binary search in its own row and in
- * the next one (the merge of two rows tests about the boxes of the next row
- * that start inside it, and vice versa). O(n log n), no pair is touched. */
+ * the next one (its look back and the wide boxes' scans down, as in
+ * sweep_rows and sweep_wide). O(n log n), no pair is touched. */
 mk_status mk_sweep_count_(mk_bp *bp, double *tests)
 {
     struct mk_sweep *w;
@@ -888,25 +1036,16 @@ mk_status mk_sweep_count_(mk_bp *bp, double *tests)
         for (i = s; i < e; ++i) {
             t += first_above(w, i + 1, e, w->rhi[i], 1) - (i + 1);
             if (u > e)
-                t += first_above(w, e, u, w->rhi[i] + MK_SWEEP_ROW_, 1) - first_above(w, e, u, w->rlo[i] + MK_SWEEP_ROW_, 0);
+                t += first_above(w, e, u, w->rhi[i] + MK_SWEEP_ROW_, 1) -
+                     first_above(w, e, u, w->rlo[i] + MK_SWEEP_ROW_ - w->f.wq, 0);
         }
         for (i = e; i < u; ++i)
-            t += first_above(w, s, e, w->rhi[i] - MK_SWEEP_ROW_, 1) - first_above(w, s, e, w->rlo[i] - MK_SWEEP_ROW_, 1);
+            if (w->rhi[i] - w->rlo[i] > w->f.wq)
+                t += first_above(w, s, e, w->rhi[i] - MK_SWEEP_ROW_, 1) -
+                     first_above(w, s, e, w->rlo[i] - MK_SWEEP_ROW_ + w->f.wq, 1);
     }
     *tests = t + (double)nbig * n;
     return MK_OK;
-}
-
-/* First sorted index in [i, n) whose row is at least `row`. */
-static int row_start(const struct mk_sweep *w, int i, uint32_t row)
-{
-    int hi = w->n;
-    while (i < hi) {
-        int mid = i + (hi - i) / 2;
-        if (row_at(w, mid) < row) i = mid + 1;
-        else hi = mid;
-    }
-    return i;
 }
 
 /* The rows that can hold a box overlapping q (a box starts at most h below

