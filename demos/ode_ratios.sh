@@ -6,6 +6,10 @@
 # FILE holds one JSON line per frame (or step) and backend, as written by
 #   build/demos/ode_scenes --scene stress_space --poses P --per-frame FILE   (replay)
 #   build/demos/ode_scenes --scene stress --per-frame FILE                    (running simulation)
+#   build/demos/ode_scenes --scene stress --load-state S25 --per-frame FILE   (its steps 25..99 only)
+# where S25 was saved once by
+#   build/demos/ode_scenes --scene stress --backend ode.sap --steps 25 --save-state S25
+# (the restart continues the running simulation bit for bit; see ode_scenes.c).
 # For each case in the file and each Minko backend in it (a name starting
 # with "minko"), its space collide time against the faster of ODE's two
 # spaces (ode.hash, ode.sap), four ways, since the mean and the median of a

@@ -13,7 +13,7 @@
  * backend of each case.
  *
  *   ode_scenes [--quick] [--json FILE] [--scene NAME] [--reps N] [--poses FILE] [--frames A:B] [--per-frame FILE]
- *              [--backend NAME[,NAME...]] [--steps N] [--start F] [--compare]
+ *              [--backend NAME[,NAME...]] [--steps N] [--start F] [--compare] [--save-state FILE] [--load-state FILE]
  *
  * --backend NAME[,NAME...] runs only those backends and --steps N runs N
  * steps (short runs under callgrind: --toggle-collect=mk_ode_space_collide
@@ -24,7 +24,20 @@
  * for a profile of it); --start F
  * (with --poses FILE, the stress scene only) starts the stress heap from
  * the recorded poses of frame F at rest, so that the settled heap's frames
- * run without the minutes its first frames take. --compare: see compare_pair.
+ * run without the minutes its first frames take (at rest: a different
+ * simulation from the running one). --compare: see compare_pair.
+ *
+ * Restart (with --scene NAME): --save-state FILE writes the first backend's
+ * world after the run; --load-state FILE builds every backend's world, puts
+ * it in that state and runs on from the saved step (to the scene's end, or
+ * --steps N more), which is the uninterrupted run's continuation bit for
+ * bit (see "restart" below). The stress scene's steady steps without its
+ * dense first 25 (those take ~5 min at load 9):
+ *   ode_scenes --scene stress --backend ode.sap --steps 25 --save-state S25
+ *   ode_scenes --scene stress --backend ode.sap,ode.hash,minko.bp --load-state S25 --per-frame F
+ *   sh demos/ode_ratios.sh F
+ * (steps 25..99, ~5 s of CPU); under callgrind, --backend minko.bp
+ * --load-state S25 with --toggle-collect=mk_ode_space_collide.
  *
  * Per case and backend: median ms per step (space collide, colliders = the
  * near-callback pass incl. contact joints, total incl. QuickStep), candidate
@@ -296,6 +309,7 @@ static int backend_chosen(const char *name)
 static int steps_override;
 static int start_frame;
 static recording start_rec; /* frames of --poses, read for --start */
+static const char *save_state_path, *load_state_path; /* --save-state, --load-state */
 static int compare_contacts;
 
 typedef struct sim {
@@ -311,6 +325,7 @@ typedef struct sim {
     pair *pairs;
     size_t npairs, cappairs;
     unsigned long seed; /* this world's dRand state */
+    int first;          /* the first step run (--load-state: the saved one; else 0) */
     int step;
     double *t_space, *t_narrow, *t_total;
     long long cand_pairs, contacts;
@@ -889,17 +904,17 @@ static metrics sim_metrics(sim *s)
 {
     const scene *sc = s->sc;
     metrics m;
-    double *coll = xrealloc(NULL, (size_t)sc->steps * sizeof(double));
-    int i;
+    int nsteps = sc->steps - s->first, i;
+    double *coll = xrealloc(NULL, (size_t)nsteps * sizeof(double));
     memset(&m, 0, sizeof m);
-    for (i = 0; i < sc->steps; i++) coll[i] = s->t_space[i] + s->t_narrow[i];
-    m.ms_collision = median(coll, sc->steps);
-    m.ms_space = median(s->t_space, sc->steps);
-    m.ms_narrow = median(s->t_narrow, sc->steps);
-    m.ms_total = median(s->t_total, sc->steps);
+    for (i = 0; i < nsteps; i++) coll[i] = s->t_space[s->first + i] + s->t_narrow[s->first + i];
+    m.ms_collision = median(coll, nsteps);
+    m.ms_space = median(s->t_space + s->first, nsteps);
+    m.ms_narrow = median(s->t_narrow + s->first, nsteps);
+    m.ms_total = median(s->t_total + s->first, nsteps);
     free(coll);
-    m.pairs_per_step = (double)s->cand_pairs / sc->steps;
-    m.contacts_per_step = (double)s->contacts / sc->steps;
+    m.pairs_per_step = (double)s->cand_pairs / nsteps;
+    m.contacts_per_step = (double)s->contacts / nsteps;
     m.minko_share = s->minko_pairs + s->fallbacks ? (double)s->minko_pairs / (double)(s->minko_pairs + s->fallbacks) : 0;
     m.max_depth = s->max_depth_late;
     m.ground_pen = s->ground_pen_late;
@@ -931,10 +946,10 @@ static int same_state(const sim *a, const sim *b)
 
 /* ---- output -------------------------------------------------------------- */
 
-static void print_header(const scene *sc, int nbodies)
+static void print_header(const scene *sc, int first, int nbodies)
 {
-    printf("\n%s %s: %d bodies, %d steps of %g s (ms are medians per step)\n", sc->name, sc->variant, nbodies,
-           sc->steps, sc->dt);
+    printf("\n%s %s: %d bodies, steps %d..%d of %g s (ms are medians per step)\n", sc->name, sc->variant, nbodies, first,
+           sc->steps - 1, sc->dt);
     printf("  %-10s %8s %8s %8s %8s %9s %9s %9s %9s %10s %9s %4s %4s %6s\n", "backend", "total", "collide", "space",
            "narrow", "pairs", "contacts", "depth", "ground", "ke_end", "drift", "tun", "same", "minko");
 }
@@ -958,12 +973,13 @@ static void json_row(FILE *f, const sim *s, const metrics *m, int same)
             "\"narrow_ms_per_frame\":%.6g,\"candidate_pairs_per_frame\":%.6g,\"contacts_per_frame\":%.6g,"
             "\"max_penetration\":%.6g,\"ground_penetration\":%.6g,\"ke_end\":%.6g,\"drift\":%.6g,\"tunnelled\":%d,"
             "\"same_end_state_as\":\"%s\",\"same_end_state\":%s",
-            sc->name, sc->variant, s->be->name, sc->steps, s->nbodies, sc->dt, m->ms_total, m->ms_collision,
+            sc->name, sc->variant, s->be->name, sc->steps - s->first, s->nbodies, sc->dt, m->ms_total, m->ms_collision,
             m->ms_space, m->ms_narrow, m->pairs_per_step, m->contacts_per_step, m->max_depth, m->ground_pen,
             m->ke_end, m->drift, m->tunnelled, BACKENDS[0].name, same ? "true" : "false");
+    if (s->first) fprintf(f, ",\"first_step\":%d", s->first);
     if (s->be->collide != dCollide) fprintf(f, ",\"minko_narrowphase_share\":%.6g", m->minko_share);
     if (s->be->toi)
-        fprintf(f, ",\"substeps_per_frame\":%.6g,\"substep_cap_hits\":%d", (double)s->substeps / sc->steps, s->substep_cap);
+        fprintf(f, ",\"substeps_per_frame\":%.6g,\"substep_cap_hits\":%d", (double)s->substeps / (sc->steps - s->first), s->substep_cap);
     fprintf(f, "}\n");
     fflush(f);
 }
@@ -977,11 +993,126 @@ static void pose_bodies(const sim *s, const recording *r, int frame);
 static void write_steps(FILE *pf, const sim *s)
 {
     int i;
-    for (i = 0; i < s->sc->steps; i++)
+    for (i = s->first; i < s->sc->steps; i++)
         fprintf(pf,
                 "{\"suite\":\"ode\",\"case\":\"%s_step\",\"variant\":\"%s\",\"backend\":\"%s\",\"n\":1,\"step\":%d,"
                 "\"space_ms\":%.6g,\"narrow_ms\":%.6g,\"total_ms\":%.6g}\n",
                 s->sc->name, s->sc->variant, s->be->name, i, s->t_space[i], s->t_narrow[i], s->t_total[i]);
+}
+
+/* ---- restart: --save-state FILE, --load-state FILE ----
+ *
+ * A world's state between two steps is its bodies' positions, quaternions
+ * and velocities and its dRand seed: contact joints are emptied after every
+ * step, forces are cleared by the step, and QuickStep keeps no warm start.
+ * The file holds that state for one scene (name and size checked) after
+ * `step` steps; loading it into freshly built worlds (the same geoms and
+ * masses, rebuilt by the scene) continues the run at that step, bit for
+ * bit: the 10 000-sphere stress heap saved at step 25 and continued to 100
+ * ends in the same state as the run from step 0, checked with
+ *   --scene stress --backend ode.sap --save-state END0
+ *   --scene stress --backend ode.sap --steps 25 --save-state S25
+ *   --scene stress --backend ode.sap --load-state S25 --save-state END25
+ *   cmp END0 END25
+ * (and likewise for tower, pyramid and mixed). The state is ODE's only:
+ * backends with Minko's narrowphase (minko, minko.np) continue with a cold
+ * contact cache, so their worlds are not bit for bit theirs; minko.bp, the
+ * space collide backend, keeps nothing that changes a world. */
+
+#define STATE_MAGIC 0x4d4b5354u /* "MKST" */
+#define STATE_REALS 25          /* per body: position 3, quaternion 4, linear and angular velocity 3 + 3, rotation 12 */
+
+typedef struct world_state {
+    int step, nbodies;
+    unsigned long seed;
+    dReal *body; /* STATE_REALS per body */
+} world_state;
+
+static void state_header(const scene *sc, uint32_t head[8], int step, int nbodies)
+{
+    memset(head, 0, 8 * sizeof *head);
+    head[0] = STATE_MAGIC;
+    strncpy((char *)&head[1], sc->name, 12); /* head[1..3]: the scene's name, cut to 12 bytes */
+    head[4] = (uint32_t)sc->n;
+    head[5] = (uint32_t)nbodies;
+    head[6] = (uint32_t)step;
+}
+
+/* The first world's state after its last step (--save-state). */
+static void save_state(const char *path, const sim *s)
+{
+    FILE *f = fopen(path, "wb");
+    uint32_t head[8];
+    uint64_t seed = s->seed;
+    int k, ok = f != NULL;
+    state_header(s->sc, head, s->step, s->nbodies);
+    ok = ok && fwrite(head, sizeof head, 1, f) == 1 && fwrite(&seed, sizeof seed, 1, f) == 1;
+    for (k = 0; ok && k < s->nbodies; k++) {
+        dBodyID b = s->bodies[k].body;
+        ok = fwrite(dBodyGetPosition(b), sizeof(dReal), 3, f) == 3 && fwrite(dBodyGetQuaternion(b), sizeof(dReal), 4, f) == 4 &&
+             fwrite(dBodyGetLinearVel(b), sizeof(dReal), 3, f) == 3 && fwrite(dBodyGetAngularVel(b), sizeof(dReal), 3, f) == 3 &&
+             fwrite(dBodyGetRotation(b), sizeof(dReal), 12, f) == 12;
+    }
+    if (!ok || fclose(f) != 0) {
+        perror(path);
+        exit(2);
+    }
+}
+
+static void load_state(const char *path, const scene *sc, world_state *w)
+{
+    FILE *f = fopen(path, "rb");
+    uint32_t head[8], want[8];
+    uint64_t seed;
+    size_t n;
+    if (!f) {
+        perror(path);
+        exit(2);
+    }
+    if (fread(head, sizeof head, 1, f) != 1 || fread(&seed, sizeof seed, 1, f) != 1) head[0] = 0;
+    state_header(sc, want, (int)head[6], (int)head[5]);
+    if (memcmp(head, want, sizeof head) != 0) {
+        fprintf(stderr, "ode_scenes: %s is not a saved state of %s %s\n", path, sc->name, sc->variant);
+        exit(2);
+    }
+    w->step = (int)head[6];
+    w->nbodies = (int)head[5];
+    w->seed = (unsigned long)seed;
+    n = STATE_REALS * (size_t)w->nbodies;
+    w->body = xrealloc(NULL, n * sizeof(dReal));
+    if (fread(w->body, sizeof(dReal), n, f) != n) {
+        fprintf(stderr, "ode_scenes: %s is truncated\n", path);
+        exit(2);
+    }
+    fclose(f);
+}
+
+/* Puts a freshly built world in state w: it continues at step w->step. */
+static void restore_state(sim *s, const world_state *w)
+{
+    int k;
+    if (s->nbodies != w->nbodies) {
+        fprintf(stderr, "ode_scenes: the saved state has %d bodies, %s builds %d\n", w->nbodies, s->sc->name, s->nbodies);
+        exit(2);
+    }
+    for (k = 0; k < s->nbodies; k++) {
+        const dReal *x = w->body + STATE_REALS * (size_t)k;
+        body_rec *r = &s->bodies[k];
+        dBodySetPosition(r->body, x[0], x[1], x[2]);
+        /* dBodySetQuaternion normalises q again, which moves the last bit
+         * of many stepped (already normalised) quaternions, and the heap is
+         * chaotic enough to carry that into the positions (5e-10 m in 75
+         * steps): after it has told the geoms, the saved q and R are
+         * written over the body's own (the arrays ODE's getters return). */
+        dBodySetQuaternion(r->body, x + 3);
+        memcpy((dReal *)dBodyGetQuaternion(r->body), x + 3, 4 * sizeof(dReal));
+        memcpy((dReal *)dBodyGetRotation(r->body), x + 13, 12 * sizeof(dReal));
+        dBodySetLinearVel(r->body, x[7], x[8], x[9]);
+        dBodySetAngularVel(r->body, x[10], x[11], x[12]);
+        memcpy(r->ref, x, sizeof r->ref);
+    }
+    s->seed = w->seed;
+    s->first = s->step = w->step;
 }
 
 static void run_case(const scene *case_sc, FILE *json, FILE *pf)
@@ -989,23 +1120,33 @@ static void run_case(const scene *case_sc, FILE *json, FILE *pf)
     sim sims[NBACKENDS];
     scene shortened = *case_sc;
     const scene *sc = &shortened;
-    int b, n = 0, step;
-    if (steps_override > 0) shortened.steps = steps_override;
+    world_state w = {0, 0, 0, NULL};
+    int b, n = 0;
+    if (load_state_path) load_state(load_state_path, case_sc, &w);
+    if (steps_override > 0) shortened.steps = w.step + steps_override; /* steps run, from the loaded one */
+    if (w.step >= sc->steps) {
+        fprintf(stderr, "ode_scenes: %s is saved at step %d; %s has %d steps (--steps N runs N more)\n", load_state_path,
+                w.step, sc->name, sc->steps);
+        exit(2);
+    }
     for (b = 0; b < NBACKENDS; b++) { /* time of impact only where something is fast */
         if ((BACKENDS[b].toi && sc->wall_x <= 0) || !backend_chosen(BACKENDS[b].name)) continue;
         sim_init(&sims[n], &BACKENDS[b], sc);
         if (start_rec.pose && sc->build == build_stress) pose_bodies(&sims[n], &start_rec, start_frame);
+        if (w.body) restore_state(&sims[n], &w);
         n++;
     }
+    free(w.body);
     if (n == 0) {
         fprintf(stderr, "ode_scenes: no backend %s in %s\n", only_backend, sc->name);
         exit(2);
     }
-    for (step = 0; step < sc->steps; step++)
+    while (sims[0].step < sc->steps)
         for (b = 0; b < n; b++) sim_step(&sims[b]);
+    if (save_state_path) save_state(save_state_path, &sims[0]);
     if (pf)
         for (b = 0; b < n; b++) write_steps(pf, &sims[b]); /* before sim_metrics sorts the times */
-    print_header(sc, sims[0].nbodies);
+    print_header(sc, sims[0].first, sims[0].nbodies);
     for (b = 0; b < n; b++) {
         metrics m = sim_metrics(&sims[b]);
         int same = same_state(&sims[0], &sims[b]);
@@ -1582,6 +1723,10 @@ int main(int argc, char **argv)
             start_frame = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--compare"))
             compare_contacts = 1;
+        else if (!strcmp(argv[i], "--save-state") && i + 1 < argc)
+            save_state_path = argv[++i];
+        else if (!strcmp(argv[i], "--load-state") && i + 1 < argc)
+            load_state_path = argv[++i];
         else {
             fprintf(stderr,
                     "usage: %s [--quick] [--json FILE] [--scene stress|stress_space|tower|pyramid|hulls|mixed|wall|hull_depth]\n"
@@ -1590,7 +1735,9 @@ int main(int argc, char **argv)
                     "       pairs per space, or each simulated step's times per backend, as JSON Lines)\n"
                     "       [--backend NAME[,NAME...]] [--steps N] [--start F]   (those backends only; N steps per scene; the stress\n"
                     "       scene from frame F of --poses FILE, at rest)\n"
-                    "       [--compare]   (Minko's contacts against dCollide's on the same poses, per class pair)\n",
+                    "       [--compare]   (Minko's contacts against dCollide's on the same poses, per class pair)\n"
+                    "       [--save-state FILE] [--load-state FILE]   (with --scene: the first backend's world after the\n"
+                    "       run; every world starts from it and runs on from its step)\n",
                     argv[0]);
             return 2;
         }
@@ -1611,6 +1758,11 @@ int main(int argc, char **argv)
         for (i = 0; i < NHULLS; i++) hull_make(&hulls[i], &r);
     }
     ncases = make_cases(cases, quick);
+    if ((save_state_path || load_state_path) &&
+        (!only || !strcmp(only, "stress_space") || !strcmp(only, "hull_depth") || start_frame > 0)) {
+        fprintf(stderr, "ode_scenes: --save-state and --load-state need --scene with a simulated scene, and no --start\n");
+        return 2;
+    }
     if (start_frame > 0) {
         for (i = 0; i < ncases && cases[i].build != build_stress; i++) {}
         if (!poses_path || !load_frames(poses_path, &cases[i], &start_rec) || start_frame >= start_rec.frames) {

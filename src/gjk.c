@@ -42,8 +42,11 @@ static void sol_vertex(const mk_cso_vertex *s, int i, sv_sol *out)
 static void sv_1d(const mk_cso_vertex *s, int i, int j, sv_sol *out)
 {
     mk_vec3 a = s[i].w, t = mk_v3_sub(s[j].w, a);
-    mk_real tt = mk_v3_len2(t), lb = -mk_v3_dot(a, t) / tt; /* weight of j */
-    if (!(lb < 1)) { /* also tt == 0 (NaN) */
+    /* Weight of j. Two coincident points (tt == 0, which rounding makes
+     * happen for unit shapes far from the origin in float) are vertex j,
+     * without dividing by zero. */
+    mk_real tt = mk_v3_len2(t), lb = tt > 0 ? -mk_v3_dot(a, t) / tt : 1;
+    if (!(lb < 1)) { /* also NaN input */
         sol_vertex(s, j, out);
     } else if (!(lb > 0)) {
         sol_vertex(s, i, out);

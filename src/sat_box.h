@@ -174,6 +174,25 @@ MK_ALWAYS_INLINE mk_real box_face_best(mk_vec3 s, int *at)
     return best;
 }
 
+/* The normal of face axis i of A (of B) oriented from A towards B: `up`
+ * says whether B's centre lies on the + side of A's axis i (A's on the -
+ * side of B's axis j, tb = R^T t), and the normal is that axis, negated
+ * when not. One definition for the manifold's SAT result and mk_distance's
+ * overlapping boxes. */
+MK_ALWAYS_INLINE int box_face_a_up(mk_vec3 t, int i) { return (i == 0 ? t.x : i == 1 ? t.y : t.z) >= 0; }
+MK_ALWAYS_INLINE int box_face_b_up(const box_faces *f, int j) { return (j == 0 ? f->tb.x : j == 1 ? f->tb.y : f->tb.z) >= 0; }
+MK_ALWAYS_INLINE mk_vec3 box_face_a_normal(int i, int up)
+{
+    /* From a table: the normal built from three selects was stored in
+     * halves and reloaded whole (a store-forwarding stall per call). */
+    static const mk_vec3 unit[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    return mk_v3_scale(unit[i], up ? 1 : -1);
+}
+MK_ALWAYS_INLINE mk_vec3 box_face_b_normal(const mk_mat3 *R, int j, int up)
+{
+    return mk_v3_scale(j == 0 ? R->c0 : j == 1 ? R->c1 : R->c2, up ? 1 : -1);
+}
+
 /* R as plain scalars: r[i][j] is row i, column j (column j = B's axis j in
  * A's frame). */
 MK_ALWAYS_INLINE void box_rows(const mk_mat3 *R, mk_real r[3][3])
@@ -254,21 +273,17 @@ MK_ALWAYS_INLINE void mk_sat_box_box_rest_inl(mk_vec3 ha, mk_vec3 hb, const mk_m
     kind = mk_sat_choose(x.sa, x.sb, x.se, x.k >= 0, x.stopped, opt, out);
     out->kind = kind;
     if (kind == MK_SAT_FACE_A) {
-        mk_real da = x.fa == 0 ? t.x : x.fa == 1 ? t.y : t.z, si = da >= 0 ? 1 : -1;
-        out->a = 2 * x.fa + (da >= 0);
+        int up = box_face_a_up(t, x.fa);
+        out->a = 2 * x.fa + up;
         out->b = -1;
         out->separation = x.sa;
-        /* From a table: the normal built from three selects was stored in
-         * halves and reloaded whole (a store-forwarding stall per call). */
-        static const mk_vec3 unit[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-        out->normal = mk_v3_scale(unit[x.fa], si);
+        out->normal = box_face_a_normal(x.fa, up);
     } else if (kind == MK_SAT_FACE_B) {
-        mk_real db = x.fb == 0 ? f->tb.x : x.fb == 1 ? f->tb.y : f->tb.z, sj = db >= 0 ? 1 : -1;
-        mk_vec3 c = x.fb == 0 ? R->c0 : x.fb == 1 ? R->c1 : R->c2;
+        int up = box_face_b_up(f, x.fb);
         out->a = -1;
-        out->b = 2 * x.fb + (db < 0);
+        out->b = 2 * x.fb + !up;
         out->separation = x.sb;
-        out->normal = mk_v3_scale(c, sj);
+        out->normal = box_face_b_normal(R, x.fb, up);
     } else {
         mk_real r[3][3], d[3];
         box_rows(R, r);
