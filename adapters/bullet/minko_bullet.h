@@ -283,6 +283,8 @@ private:
         mk_status status;
         mk_pose pose;
     };
+    mk_status pose_of(const btCollisionObjectWrapper *w, const ShapeMap &map, mk_pose *scratch, const mk_pose **out);
+    mk_status remake_pose(PoseEntry &e, const btCollisionObject *object, const btTransform &t, const ShapeMap &map);
     Backend m_backend;
     CreateFunc *m_create;
     btAlignedObjectArray<PoseEntry> m_poses;  // by btCollisionObject::getWorldArrayIndex()

@@ -97,27 +97,44 @@ btScalar face_separation(int k, const mk_vec3 &ha, const mk_vec3 &hb, btScalar r
 }
 
 // The first face axis (numbered as in face_separation) along which two
-// boxes are more than `gap` apart, or -1. All six at once: B's rotation in
-// A's frame, the offset and the slack are shared (some 130 flops against
-// 6 x 45 one axis at a time). Most boxes that mk_collide finds apart are
-// within the threshold on every face axis (on the 1000 stack 126k of 131k
-// calls), so all six are usually needed.
-int apart_face(const mk_shape &a, const mk_shape &b, const btTransform &ta, const btTransform &tb, btScalar gap)
+// boxes are more than `gap` apart (*apart), and, when there is none, the
+// first along which they are apart at all (*separated; left as it is
+// otherwise), or -1. All six at once: B's rotation in A's frame, the offset
+// and the slack are shared (some 130 flops against 6 x 45 one axis at a
+// time), and one pass serves both gaps (two passes, one per gap, cost 31 M
+// instructions more per 300 steps of the 3000 boxes, 20 M on the 1000
+// stack). Most boxes that mk_collide finds apart are within the threshold
+// on every face axis (on the 1000 stack 126k of 131k calls), so all six are
+// usually needed.
+void apart_faces(const mk_shape &a, const mk_shape &b, const btTransform &ta, const btTransform &tb, btScalar gap,
+                 int *apart, int *separated)
 {
     const mk_vec3 &ha = a.u.half_extents, &hb = b.u.half_extents;
     const btMatrix3x3 &ra = ta.getBasis(), &rb = tb.getBasis();
     const btVector3 d = tb.getOrigin() - ta.getOrigin();
     const btVector3 da = d * ra, db = d * rb;  // R^T d: the offset along each box's axes
     const btMatrix3x3 c = ra.transposeTimes(rb);  // c[i][j] = A's axis i . B's axis j
-    const btScalar cut = gap + a.radius + b.radius + face_slack(d, ha, hb);
-    btScalar abs_c[3][3];
+    const btScalar slack = face_slack(d, ha, hb);
+    btScalar abs_c[3][3], sep[6];
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) abs_c[i][j] = btFabs(c[i][j]);
     for (int i = 0; i < 3; i++)
-        if (btFabs(da[i]) - (&ha.x)[i] - (abs_c[i][0] * hb.x + abs_c[i][1] * hb.y + abs_c[i][2] * hb.z) > cut) return i;
+        sep[i] = btFabs(da[i]) - (&ha.x)[i] - (abs_c[i][0] * hb.x + abs_c[i][1] * hb.y + abs_c[i][2] * hb.z);
     for (int j = 0; j < 3; j++)
-        if (btFabs(db[j]) - (&hb.x)[j] - (abs_c[0][j] * ha.x + abs_c[1][j] * ha.y + abs_c[2][j] * ha.z) > cut) return 3 + j;
-    return -1;
+        sep[3 + j] = btFabs(db[j]) - (&hb.x)[j] - (abs_c[0][j] * ha.x + abs_c[1][j] * ha.y + abs_c[2][j] * ha.z);
+    *apart = -1;
+    for (int k = 0; k < 6; k++)
+        if (sep[k] > gap + a.radius + b.radius + slack) {
+            *apart = k;
+            return;
+        }
+    if (!separated) return;
+    *separated = -1;
+    for (int k = 0; k < 6; k++)
+        if (sep[k] > btScalar(0) + a.radius + b.radius + slack) {
+            *separated = k;
+            return;
+        }
 }
 
 // Both shapes are hulls with polyhedral features
@@ -221,6 +238,7 @@ public:
         if (st == MK_OK) st = refresh_map(wb->getCollisionShape(), &m_b, &changed_b);
         if (changed_a) m_reach_a = core_reach(m_a.shape);
         if (changed_b) m_reach_b = core_reach(m_b.shape);
+        if (changed_a || changed_b) m_cold = false;  // start_cold's flags depend on the shapes
         // Two hulls with polyhedral features meet as Bullet's own algorithm
         // has them meet: btConvexConvexAlgorithm then measures and clips the
         // margin-free cores (btPolyhedralContactClipping; its GJK distance is
@@ -273,10 +291,10 @@ public:
                 // previous mk_collide call), none is unchanged: 1000 stack 60
                 // of 484,827 calls within 1e-6, 0 bit-identical transforms;
                 // 3000 boxes 0 of 936,632. Resting Bullet boxes jitter more.
+                m_cold = false;
                 st = mk_collide_pose(&sa, pa, &sb, pb, threshold, &m_cache, &mf);
                 if (st == MK_OK && boxes && mf.count == 0) {
-                    m_apart_face = apart_face(sa, sb, ta, tb, threshold);
-                    if (m_apart_face < 0 && touching_only(sa, sb)) m_separated_face = apart_face(sa, sb, ta, tb, 0);
+                    apart_faces(sa, sb, ta, tb, threshold, &m_apart_face, touching_only(sa, sb) ? &m_separated_face : nullptr);
                 }
             }
         }
@@ -363,8 +381,14 @@ private:
     // Bullet's pairs take the minimum-penetration face every frame rather
     // than the face kind held for ID-only hosts: the held face tilts a
     // rocking stack's normal by the boxes' relative tilt.
+    // (Once: a pair skipped as apart frame after frame keeps its cold cache,
+    // which only mk_collide or a changed shape make warm or stale; zeroing
+    // it again every frame cost 36 M instructions per 300 steps of the
+    // 3000 boxes.)
     void start_cold()
     {
+        if (m_cold) return;
+        m_cold = true;
         m_cache = mk_manifold_cache();
         m_cache.mode = MK_MANIFOLD_BEST_FACE;
         // Box-box pairs report touching points only, as Bullet's own
@@ -404,6 +428,7 @@ private:
         PairContact pts[MK_COLLIDE_MAX_CANDIDATES];
         mk_vec3 normal;
         int count = 0;
+        m_cold = false;
         const mk_status st = mk_collide_pose_points(&sa, pa, &sb, pb, threshold, &m_cache, &normal, cand,
                                                     MK_COLLIDE_MAX_CANDIDATES, &count);
         if (st != MK_OK) return st;
@@ -424,6 +449,7 @@ private:
     int m_apart_face = -1;          // two boxes: face axis that kept them apart (face_separation), or -1
     int m_separated_face = -1;      // ...that separated them by less than the threshold (stay_separated), or -1
     mk_manifold_cache m_cache;
+    bool m_cold = false;  // m_cache is as start_cold() left it
 };
 
 btDefaultCollisionConstructionInfo with_room_for_minko(btDefaultCollisionConstructionInfo info)
@@ -646,9 +672,9 @@ mk_status CollisionConfiguration::world_poses(const btCollisionObjectWrapper *wa
                                               const btCollisionObjectWrapper *wb, const ShapeMap &mb, mk_pose scratch[2],
                                               const mk_pose **pa, const mk_pose **pb)
 {
-    *pa = &scratch[0];
-    *pb = &scratch[1];
     if (btThreadsAreRunning()) {
+        *pa = &scratch[0];
+        *pb = &scratch[1];
         mk_status st = minko_pose(wa->getWorldTransform(), ma, &scratch[0]);
         return st == MK_OK ? minko_pose(wb->getWorldTransform(), mb, &scratch[1]) : st;
     }
@@ -658,33 +684,38 @@ mk_status CollisionConfiguration::world_poses(const btCollisionObjectWrapper *wa
         if (top >= m_poses.capacity()) m_poses.reserve(std::max(top + 1, 2 * m_poses.capacity()));
         m_poses.resize(top + 1, PoseEntry());
     }
-    // One loop body for both objects, so that it is inlined once: per object
-    // the lookup is its index, two pointer compares and the bytes of its
-    // transform.
-    const btCollisionObjectWrapper *const w[2] = {wa, wb};
-    const ShapeMap *const map[2] = {&ma, &mb};
-    const mk_pose **const out[2] = {pa, pb};
-    for (int k = 0; k < 2; k++) {
-        const btCollisionObject *object = w[k]->getCollisionObject();
-        const btTransform &t = w[k]->getWorldTransform();
-        const int i = object->getWorldArrayIndex();
-        mk_status st;
-        if (&t != &object->getWorldTransform() || i < 0) {  // a compound's child, or outside a world
-            st = minko_pose(t, *map[k], &scratch[k]);
-        } else {
-            PoseEntry &e = m_poses[i];
-            if (e.object != object || !made_from(e.from, e.axis, t, map[k]->axis)) {
-                e.object = object;
-                keep_source(e.from, t);
-                e.axis = map[k]->axis;
-                e.status = minko_pose(t, *map[k], &e.pose);
-            }
-            st = e.status;
-            *out[k] = &e.pose;
-        }
-        if (st != MK_OK) return st;
+    const mk_status st = pose_of(wa, ma, &scratch[0], pa);
+    return st == MK_OK ? pose_of(wb, mb, &scratch[1], pb) : st;
+}
+
+// One object's pose: inline, the lookup of an unchanged transform (its
+// index, two pointer compares and the bytes of its transform); out of line,
+// the remaking. (Session 11 inlined one loop body for both objects, each
+// with the remaking in it: 306 instructions per pair on the 3000 boxes.)
+inline mk_status CollisionConfiguration::pose_of(const btCollisionObjectWrapper *w, const ShapeMap &map, mk_pose *scratch,
+                                                 const mk_pose **out)
+{
+    const btCollisionObject *object = w->getCollisionObject();
+    const btTransform &t = w->getWorldTransform();
+    const int i = object->getWorldArrayIndex();
+    if (&t != &object->getWorldTransform() || i < 0) {  // a compound's child, or outside a world
+        *out = scratch;
+        return minko_pose(t, map, scratch);
     }
-    return MK_OK;
+    PoseEntry &e = m_poses[i];
+    *out = &e.pose;
+    if (e.object == object && made_from(e.from, e.axis, t, map.axis)) return e.status;
+    return remake_pose(e, object, t, map);
+}
+
+__attribute__((noinline)) mk_status CollisionConfiguration::remake_pose(PoseEntry &e, const btCollisionObject *object,
+                                                                        const btTransform &t, const ShapeMap &map)
+{
+    e.object = object;
+    keep_source(e.from, t);
+    e.axis = map.axis;
+    e.status = minko_pose(t, map, &e.pose);
+    return e.status;
 }
 
 bool set_narrowphase(btCollisionWorld *world, Backend b)

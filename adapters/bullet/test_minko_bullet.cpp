@@ -163,9 +163,11 @@ END_TEST
 
 // ---- the feature-matched contact writer ---------------------------------------
 
-// Two boxes and one manifold, as a collision algorithm sees them.
+// Two shapes and one manifold, as a collision algorithm sees them. Spheres:
+// the points written are made up, and the writer orders a box pair's new
+// points by the boxes' geometry (np_box_points_in_bullets_order).
 struct WriterRig {
-    btBoxShape shape{btVector3(1, 1, 1)};
+    btSphereShape shape{1};
     btTransform ta{btQuaternion(btVector3(1, 2, 3), btScalar(0.4)), btVector3(0, btScalar(1.9), 0)};
     btTransform tb{btQuaternion(btVector3(0, 1, 0), btScalar(0.1)), btVector3(0, 0, 0)};
     btCollisionObject a, b;
@@ -1981,6 +1983,64 @@ START_TEST(np_warm_pairs_take_the_best_face)
 }
 END_TEST
 
+// Bullet's solver visits a manifold's points in slot order (Gauss-Seidel),
+// so the order a new box-box manifold gets its points in changes the solve
+// (contact_writer.cpp, bullet_box_order: the 1000 stack's pyramid spreads
+// sideways more in Minko's own clip order). The adapter hands a new box
+// manifold its points in the order Bullet's btBoxBoxDetector reports them:
+// on stacked boxes, tilted, turned and offset (faces inside, clipped to a
+// quadrant or a strip, octagons culled to four), whenever both report the
+// same points, slot i holds the same point.
+START_TEST(np_box_points_in_bullets_order)
+{
+    btDefaultCollisionConfiguration native;
+    mkb::CollisionConfiguration mine;
+    btBoxShape cube(btVector3(1, 1, 1)), slab(btVector3(5, btScalar(0.5), 5)),
+        brick(btVector3(btScalar(0.8), btScalar(0.5), btScalar(0.3)));
+    btBoxShape *lowers[3] = {&cube, &slab, &cube}, *uppers[3] = {&cube, &cube, &brick};
+    mk_rng rng = {2026};
+    const double tol = sizeof(btScalar) == sizeof(double) ? 1e-6 : 2e-3;  // the two clips' round-off
+    int compared = 0, turned = 0;
+    for (int k = 0; k < 600; k++) {
+        btBoxShape *lo = lowers[k % 3], *up = uppers[k % 3];
+        // Up to ~0.02 rad of tilt on each, the upper one turned by up to
+        // 0.4 rad (every third case aligned) and offset up to a side.
+        const btScalar yaw = k % 3 == 0 ? 0 : (btScalar)mk_rng_range(&rng, -0.4, 0.4);
+        btQuaternion tl(btVector3((btScalar)mk_rng_range(&rng, -1, 1), 0, (btScalar)mk_rng_range(&rng, -1, 1)).normalized(),
+                        (btScalar)mk_rng_range(&rng, 0, 0.02));
+        btQuaternion tu(btVector3((btScalar)mk_rng_range(&rng, -1, 1), 0, (btScalar)mk_rng_range(&rng, -1, 1)).normalized(),
+                        (btScalar)mk_rng_range(&rng, 0, 0.02));
+        const btScalar hl = lo->getHalfExtentsWithMargin().y(), hu = up->getHalfExtentsWithMargin().y();
+        btTransform xl(tl, btVector3(0, 0, 0));
+        btTransform xu(btQuaternion(btVector3(0, 1, 0), yaw) * tu,
+                       btVector3((btScalar)mk_rng_range(&rng, -1.5, 1.5), hl + hu - btScalar(0.03),
+                                 (btScalar)mk_rng_range(&rng, -1.5, 1.5)));
+        // Either order of the pair: the reference face may be on A or on B.
+        const bool flip = k % 2 == 1;
+        btBoxShape *a = flip ? up : lo, *b = flip ? lo : up;
+        const btTransform &xa = flip ? xu : xl, &xb = flip ? xl : xu;
+        std::vector<PointOut> pn = collide_once(&native, a, xa, b, xb), pm = collide_once(&mine, a, xa, b, xb);
+        if (pn.size() != pm.size() || pn.size() < 2) continue;
+        bool same_points = true;
+        for (const PointOut &m : pm) {
+            bool found = false;
+            for (const PointOut &q : pn) found = found || (m.on_b - q.on_b).length() < tol;
+            same_points = same_points && found;
+        }
+        if (!same_points) continue;
+        compared++;
+        turned += yaw > btScalar(0.2) || yaw < btScalar(-0.2);
+        for (size_t i = 0; i < pm.size(); i++)
+            ck_assert_msg((pm[i].on_b - pn[i].on_b).length() < tol,
+                          "case %d slot %d of %d: Minko (%g %g %g), Bullet (%g %g %g)", k, (int)i, (int)pm.size(),
+                          (double)pm[i].on_b.x(), (double)pm[i].on_b.y(), (double)pm[i].on_b.z(), (double)pn[i].on_b.x(),
+                          (double)pn[i].on_b.y(), (double)pn[i].on_b.z());
+    }
+    ck_assert_int_ge(compared, 300);
+    ck_assert_int_ge(turned, 50);
+}
+END_TEST
+
 // An octagonal prism of circumradius 1 and height 0.5 (axis y), with
 // Bullet's polyhedral features, so Bullet's own algorithms clip it.
 static void octagonal_prism(btConvexHullShape &prism)
@@ -2662,6 +2722,7 @@ Suite *suite()
     tcase_add_test(n, np_shape_changes_seen);
     tcase_add_test(n, np_world_poses_follow_the_objects);
     tcase_add_test(n, np_warm_pairs_take_the_best_face);
+    tcase_add_test(n, np_box_points_in_bullets_order);
     tcase_add_test(n, np_hull_candidates_like_bullet);
     tcase_add_test(n, np_switch_at_run_time);
     tcase_add_test(n, np_hull_on_box_one_point_like_bullet);

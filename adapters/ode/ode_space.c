@@ -21,10 +21,19 @@
  *    in a space only the adapter collides stay dirty, so the order of the
  *    previous call usually finds each geom's record without hashing;
  *  - the filter fields (enabled, zero size, body, category and collide bits)
- *    are read lazily, once per call and only for geoms in a candidate pair,
- *    because everything they decide is per pair. Disabled geoms therefore
- *    stay in the broadphase and are filtered out of its pairs, which gives
- *    the same set as skipping them.
+ *    are read in the same walk, right after the AABB: dGeomGetAABB has just
+ *    brought the geom's cache lines in, so the six getters cost
+ *    instructions, not misses, and the pair loop then reads records, not
+ *    geoms. A geom that is disabled or zero-sized gets category and collide
+ *    bits 0 in its record, which no filter passes: it stays in the
+ *    broadphase and is filtered out of its pairs, the same set as skipping
+ *    it. (Until session 11 they were read lazily in the pair loop, for the
+ *    ~27 % of geoms in a candidate pair: fewer instructions, but each was a
+ *    miss the prefetch did not hide. Moved here, the running stress heap's
+ *    pair loop went from 0.35-0.69 to 0.10-0.22 ms per call and the walk
+ *    did not slow down (0.58-0.66 -> 0.44-0.60 ms; steps 25-99, per-call
+ *    timers, 7 and 19 runs, load 8-12), although the call runs 8 % more
+ *    instructions: 5.66 -> 6.14 M per call, callgrind.)
  *
  * Why not a persistent incremental structure (fat boxes in an mk_bp, moved
  * only when a geom leaves its box; session 9 built one, measured it and
@@ -49,6 +58,15 @@
  * alternated runs), nor did longer prefetch distances (walk 16, records
  * 48, geoms 24 pairs ahead).
  *
+ * Not kept (session 12, running stress heap, steps 25-99, load ~10,
+ * per-call timers in alternated runs): prefetching each body's position
+ * again, now from the record's body pointer (no read of the geom ahead):
+ * walk 0.54-0.59 against 0.48-0.56 ms; prefetching the second cache line
+ * of each 40-byte record (a third of them straddle two): pair loop
+ * 0.10-0.15 against 0.11-0.18 ms in one set of 5 runs, no difference in
+ * the next 5. Without the walk's geom prefetch the walk takes 0.88-1.08
+ * ms instead of 0.51-0.59: it is what keeps the walk fast.
+ *
  * Pair order: the sweep's, fixed by the calls made so far; within a pair,
  * the geom this space's records met first comes first (a first-seen index
  * per record), so neither addresses nor removals (which move records)
@@ -62,16 +80,14 @@
 #include "ode_internal.h"
 #include "ode_map.h"
 
-/* What a candidate pair reads, and no more (48 bytes): the pair loop
+/* What a candidate pair reads, and no more (40 bytes): the pair loop
  * touches two entries and, only when the boxes are not exact, two raw AABBs. */
 typedef struct entry {
-    dGeomID geom;     /* NULL: free slot */
-    uint32_t checked; /* sync epoch of the filter fields below */
-    int ok;           /* enabled and not zero-sized */
+    dGeomID geom;
     dBodyID body;
-    unsigned long cat, col;
-    uint32_t seen;    /* sync epoch that last found the geom in the space (marked only when some left) */
-    uint32_t seq;     /* first-seen index: of a pair, the geom with the lower one is passed first */
+    unsigned long cat, col; /* ODE's bits, or 0 and 0 when the geom is disabled or zero-sized */
+    uint32_t seen;          /* sync epoch that last found the geom in the space (marked only when some left) */
+    uint32_t seq;           /* first-seen index: of a pair, the geom with the lower one is passed first */
 } entry;
 
 /* ODE's interleaved AABB {minx, maxx, miny, maxy, minz, maxz}. */
@@ -149,18 +165,18 @@ static int zero_sized(dGeomID g)
     }
 }
 
-static void read_filter(const space_state *st, entry *e)
+/* The filter's fields of e's geom, read by every sync (ODE sends no notice
+ * when they change). */
+static void read_filter(entry *e)
 {
-    e->checked = st->epoch;
-    e->ok = dGeomIsEnabled(e->geom) && !zero_sized(e->geom);
-    e->body = dGeomGetBody(e->geom);
-    e->cat = dGeomGetCategoryBits(e->geom);
-    e->col = dGeomGetCollideBits(e->geom);
-}
-
-static void check_entry(const space_state *st, entry *e)
-{
-    if (e->checked != st->epoch) read_filter(st, e);
+    dGeomID g = e->geom;
+    e->body = dGeomGetBody(g);
+    if (dGeomIsEnabled(g) && !zero_sized(g)) {
+        e->cat = dGeomGetCategoryBits(g);
+        e->col = dGeomGetCollideBits(g);
+    } else {
+        e->cat = e->col = 0;
+    }
 }
 
 #if defined(__GNUC__)
@@ -171,14 +187,12 @@ static void check_entry(const space_state *st, entry *e)
 
 /* The pair loop meets records and geoms in the sweep's order, which is
  * spatial, while they lie in memory in creation order: each first visit is
- * a miss, and each waits for the one before (read_filter's reads of the
- * geom, then the callback's). Fetching them ahead lets the misses overlap
- * (in ODE's stress heap after QuickStep, about half the pair loop's time
- * was these waits). Records this many pairs ahead, */
+ * a miss, and each waits for the one before. Fetching them ahead lets the
+ * misses overlap. Records this many pairs ahead, */
 #define RECORD_AHEAD 16
-/* and the geoms of records fetched earlier: read_filter reads three cache
- * lines of a dxGeom (flags and body, the category bits, a sphere's radius),
- * once per call. */
+/* and the first cache line of the geoms of records fetched earlier, which
+ * any near callback reads (ODE's own spaces read the geoms just before they
+ * call back, so theirs come warm). */
 #define GEOM_AHEAD 8
 
 /* The three cache lines of a dxGeom that ODE's list walk, its AABB and
@@ -189,11 +203,6 @@ static void prefetch_lines(const void *geom)
     MK_PREFETCH(g);
     MK_PREFETCH(g + 64);
     MK_PREFETCH(g + 128);
-}
-
-static void prefetch_geom(const space_state *st, const entry *e)
-{
-    if (e->checked != st->epoch) prefetch_lines(e->geom);
 }
 
 /* ODE's list walk follows each geom's next pointer and dGeomGetAABB reads
@@ -209,7 +218,8 @@ static int aabbs_overlap(const dReal *a1, const dReal *a2)
     return !(a1[0] > a2[1] || a1[1] < a2[0] || a1[2] > a2[3] || a1[3] < a2[2] || a1[4] > a2[5] || a1[5] < a2[4]);
 }
 
-/* collideAABBs' tests in its order but for the AABBs' (the caller's). */
+/* collideAABBs' tests in its order but for the AABBs' (the caller's); the
+ * geoms' enabled and zero-size tests are in cat and col (read_filter). */
 static int ode_filter(dBodyID b1, unsigned long cat1, unsigned long col1, dBodyID b2, unsigned long cat2,
                       unsigned long col2)
 {
@@ -417,19 +427,28 @@ static mk_status sync(space_state *st)
         reserve_records(st, (size_t)st->n + (size_t)n) != 0)
         return MK_ERR_OUT_OF_MEMORY;
     st->epoch++;
-    for (i = 0; i < n; i++) {
-        dGeomID g;
-        if ((size_t)i + WALK_AHEAD < st->norder) {
-            int ahead = st->order[i + WALK_AHEAD];
-            if (ahead < st->n) prefetch_lines(st->entries[ahead].geom); /* a stale hint's address is harmless */
+    {
+        /* Locals, kept in registers across ODE's calls (st's fields would
+         * be reloaded after each); add_entry does not move the arrays
+         * (reserve_records above). */
+        dSpaceID space = st->space;
+        entry *entries = st->entries;
+        int *order = st->order;
+        int hinted = st->norder < (size_t)n ? (int)st->norder : n;
+        for (i = 0; i < n; i++) {
+            /* order[] is a hint (records move when one is removed): checked */
+            int k = i < hinted ? order[i] : -1;
+            dGeomID g;
+            long slot;
+            if (i + WALK_AHEAD < hinted && order[i + WALK_AHEAD] < st->n)
+                prefetch_lines(entries[order[i + WALK_AHEAD]].geom); /* a stale hint's address is harmless */
+            g = dSpaceGetGeom(space, i); /* sequential access is O(1) in ODE */
+            slot = k >= 0 && k < st->n && entries[k].geom == g ? k : mk_ode_map_get(&st->index, g, NULL);
+            if (slot < 0 && (s = add_entry(st, g, &slot)) != MK_OK) return s;
+            read_aabb(st, (int)slot, g);
+            read_filter(&entries[slot]);
+            order[i] = (int)slot;
         }
-        g = dSpaceGetGeom(st->space, i); /* sequential access is O(1) in ODE */
-        /* order[] is a hint (records move when one is removed): checked */
-        int k = (size_t)i < st->norder ? st->order[i] : -1;
-        long slot = k >= 0 && k < st->n && st->entries[k].geom == g ? k : mk_ode_map_get(&st->index, g, NULL);
-        if (slot < 0 && (s = add_entry(st, g, &slot)) != MK_OK) return s;
-        read_aabb(st, (int)slot, g);
-        st->order[i] = (int)slot;
     }
     st->norder = (size_t)n;
 #if !defined(MK_SINGLE)
@@ -523,12 +542,10 @@ void mk_ode_space_collide(dSpaceID space, void *data, dNearCallback *callback)
             MK_PREFETCH(&st->entries[pairs[i + RECORD_AHEAD].b]);
         }
         if (i + GEOM_AHEAD < np) {
-            prefetch_geom(st, &st->entries[pairs[i + GEOM_AHEAD].a]);
-            prefetch_geom(st, &st->entries[pairs[i + GEOM_AHEAD].b]);
+            MK_PREFETCH(st->entries[pairs[i + GEOM_AHEAD].a].geom);
+            MK_PREFETCH(st->entries[pairs[i + GEOM_AHEAD].b].geom);
         }
-        check_entry(st, a);
-        check_entry(st, b);
-        if (a->ok && b->ok && ode_filter(a->body, a->cat, a->col, b->body, b->cat, b->col) &&
+        if (ode_filter(a->body, a->cat, a->col, b->body, b->cat, b->col) &&
             (st->exact || aabbs_overlap(st->raw[pairs[i].a], st->raw[pairs[i].b]))) {
             reported++;
             if (a->seq < b->seq) callback(data, a->geom, b->geom);
@@ -554,9 +571,8 @@ static mk_status collect_vs_geom(space_state *st, dGeomID g, int g_first)
     for (i = 0; i < st->n; i++) {
         entry *e = &st->entries[i];
         ode_aabb tmp;
-        if (!aabbs_overlap(record_aabb(st, i, tmp), box)) continue; /* the filter fields are read for candidates only */
-        check_entry(st, e);
-        if (!e->ok || !ode_filter(e->body, e->cat, e->col, body, cat, col)) continue;
+        if (!aabbs_overlap(record_aabb(st, i, tmp), box)) continue;
+        if (!ode_filter(e->body, e->cat, e->col, body, cat, col)) continue;
         if ((g_first ? push_pair(g, e->geom) : push_pair(e->geom, g)) != 0) return MK_ERR_OUT_OF_MEMORY;
     }
     return MK_OK;
